@@ -1,0 +1,1 @@
+"""ndpack: fill any shape, in any dimension, with non-overlapping spheres."""

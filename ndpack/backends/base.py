@@ -1,0 +1,90 @@
+"""The small interface between the packing driver and the code that runs its hot loops.
+
+A backend sees plain arrays and an oracle; it holds no packing state. The driver
+(:mod:`ndpack.protosphere`) decides what to move, what to insert and when to stop; the backend
+moves prototypes, measures clearances and finds the spheres near a box. Subclasses import their
+framework lazily and raise :class:`~ndpack.errors.BackendError` with an install hint when it is
+missing.
+
+Vocabulary
+----------
+clearance
+    Distance from a point to the nearest obstacle, i.e. the shape's boundary or an inserted
+    sphere; positive in free space. A sphere of that radius around the point is free.
+neighbours
+    ``(n, k)`` int64 indices of the spheres that can be nearest to each prototype, padded with
+    ``len(centers)``, an index the backend maps to a sphere at infinity.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class Backend:
+    """Base class: the operations the ProtoSphere driver needs, on NumPy arrays in and out."""
+
+    name = "base"
+
+    def clearance(self, shape, points, centers, radii, neighbours) -> np.ndarray:
+        """Clearance of each point.
+
+        Parameters
+        ----------
+        shape : Oracle
+        points : (n, d) float64
+        centers : (m, d) float64 and radii : (m,) float64
+            The inserted spheres.
+        neighbours : (n, k) int64
+            Candidate spheres per point, padded with ``m``.
+
+        Returns
+        -------
+        (n,) float64
+        """
+        raise NotImplementedError
+
+    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
+        """Move each prototype ``p <- p + eps * (p - q)`` away from its nearest obstacle point ``q``.
+
+        Parameters
+        ----------
+        points, cell_lower, cell_upper : (n, d) float64
+            Prototypes and the boxes of their grid cells, which confine them.
+        centers, radii, neighbours :
+            As in :meth:`clearance`.
+        steps : (T,) float64
+            The cooling schedule: ``eps`` of each iteration.
+
+        Returns
+        -------
+        points : (n, d) float64
+            Converged positions.
+        clearance : (n,) float64
+            Their clearances.
+        """
+        raise NotImplementedError
+
+    def near_spheres(self, box_lower, box_upper, reach, centers, radii) -> np.ndarray:
+        """Spheres whose surface comes within ``reach`` of each box.
+
+        Parameters
+        ----------
+        box_lower, box_upper : (n, d) float64
+        reach : (n,) float64
+            Upper bound of the clearance of any point of the box.
+        centers : (m, d) float64 and radii : (m,) float64
+
+        Returns
+        -------
+        (n, k) int64
+            Indices per box, padded with ``m``.
+        """
+        raise NotImplementedError
+
+    def touched(self, points, clearance, new_centers, new_radii) -> np.ndarray:
+        """(n,) bool: prototypes whose clearance ball meets one of the new spheres (k, d), (k,)."""
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return f"<ndpack backend {self.name!r}>"

@@ -1,0 +1,114 @@
+"""The NumPy backend: the reference every other backend is compared with.
+
+Plain vectorised NumPy over all prototypes at once; loops run only over iterations and over
+chunks that keep temporary arrays near ``CHUNK_FLOATS`` entries.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .base import Backend
+
+#: Largest temporary array (in float64 entries) built at once by the pairwise loops.
+CHUNK_FLOATS = 4_000_000
+
+
+def _chunks(count: int, per_item: int):
+    size = max(1, CHUNK_FLOATS // max(per_item, 1))
+    for start in range(0, count, size):
+        yield slice(start, min(count, start + size))
+
+
+def _with_sphere_at_infinity(centers, radii):
+    """Append the padding sphere: centre at infinity, radius 0, so its clearance is +inf."""
+    dim = centers.shape[1]
+    return (
+        np.vstack([centers, np.full((1, dim), np.inf)]),
+        np.append(radii, 0.0),
+    )
+
+
+class NumpyBackend(Backend):
+    """Reference implementation in NumPy (float64, single thread)."""
+
+    name = "numpy"
+
+    def _free_space(self, shape, points, neighbour_centers, neighbour_radii):
+        """Clearance and the unit direction away from the nearest obstacle, for (n, d) points."""
+        distances, gradients = shape._distance_and_gradient(points)
+        clearance = -distances
+        direction = -gradients
+        if neighbour_centers.shape[1]:
+            offsets = points[:, None, :] - neighbour_centers
+            lengths = np.sqrt(np.einsum("nkd,nkd->nk", offsets, offsets))
+            gaps = lengths - neighbour_radii
+            nearest = np.argmin(gaps, axis=1)
+            rows = np.arange(len(points))
+            gap = gaps[rows, nearest]
+            closer = gap < clearance
+            if closer.any():
+                chosen = rows[closer]
+                length = lengths[chosen, nearest[closer]]
+                away = offsets[chosen, nearest[closer]]
+                # A prototype exactly at a sphere centre has no preferred way out: take axis 0.
+                safe = length > 0
+                away[safe] /= length[safe, None]
+                away[~safe] = np.eye(points.shape[1])[0]
+                direction[chosen] = away
+                clearance[chosen] = gap[closer]
+        return clearance, direction
+
+    def clearance(self, shape, points, centers, radii, neighbours):
+        centers, radii = _with_sphere_at_infinity(centers, radii)
+        return self._free_space(shape, points, centers[neighbours], radii[neighbours])[0]
+
+    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
+        centers, radii = _with_sphere_at_infinity(centers, radii)
+        neighbour_centers, neighbour_radii = centers[neighbours], radii[neighbours]
+        points = points.copy()
+        best_points = points.copy()
+        best = np.full(len(points), -np.inf)
+        for eps in steps:
+            clearance, direction = self._free_space(shape, points, neighbour_centers, neighbour_radii)
+            # The zig-zag around a Voronoi node is not monotone: keep the best point seen.
+            better = clearance > best
+            best[better] = clearance[better]
+            best_points[better] = points[better]
+            # |clearance|: a prototype inside an obstacle also moves towards free space.
+            points += (eps * np.abs(clearance))[:, None] * direction
+            np.clip(points, cell_lower, cell_upper, out=points)
+        clearance, _ = self._free_space(shape, points, neighbour_centers, neighbour_radii)
+        better = clearance > best
+        best[better] = clearance[better]
+        best_points[better] = points[better]
+        return best_points, best
+
+    def near_spheres(self, box_lower, box_upper, reach, centers, radii):
+        count, dim = box_lower.shape
+        if len(centers) == 0:
+            return np.zeros((count, 0), dtype=np.int64)
+        hits = []
+        for part in _chunks(count, len(centers) * dim):
+            # Distance from each sphere centre to each box, then keep the reachable spheres.
+            below = box_lower[part, None, :] - centers
+            above = centers - box_upper[part, None, :]
+            outside = np.maximum(np.maximum(below, above), 0.0)
+            gap = np.sqrt(np.einsum("nmd,nmd->nm", outside, outside)) - radii
+            hits.append(gap <= reach[part, None])
+        hits = np.concatenate(hits)
+        width = int(hits.sum(axis=1).max())
+        neighbours = np.full((count, width), len(centers), dtype=np.int64)
+        rows, columns = np.nonzero(hits)
+        # Rank of each hit within its row: its slot in the padded table.
+        starts = np.searchsorted(rows, np.arange(count))
+        neighbours[rows, np.arange(len(rows)) - starts[rows]] = columns
+        return neighbours
+
+    def touched(self, points, clearance, new_centers, new_radii):
+        result = np.zeros(len(points), dtype=bool)
+        for part in _chunks(len(new_centers), len(points) * points.shape[1]):
+            offsets = points[:, None, :] - new_centers[part]
+            gaps = np.sqrt(np.einsum("nkd,nkd->nk", offsets, offsets)) - new_radii[part]
+            result |= (gaps < clearance[:, None]).any(axis=1)
+        return result

@@ -1,0 +1,34 @@
+"""Errors raised by ndpack.
+
+Every problem with user input raises a subclass of :class:`NdpackError`, with a message that
+says what was wrong and what to do. The subclasses also derive from the matching built-in
+exception (``ValueError``, ``TypeError``), so generic handlers keep working.
+"""
+
+
+class NdpackError(Exception):
+    """Base class of every error ndpack raises on purpose."""
+
+
+class ShapeError(NdpackError, ValueError):
+    """A shape is ill-defined: wrong parameters, no interior, unbounded where bounds are needed."""
+
+
+class DimensionError(ShapeError):
+    """Points or shapes of different dimensions were combined."""
+
+
+class BoundsError(ShapeError):
+    """A shape's bounds are missing, infinite, or do not enclose the shape."""
+
+
+class OracleError(NdpackError, ValueError):
+    """A distance oracle returned something unusable (NaN, wrong shape)."""
+
+
+class ParameterError(NdpackError, ValueError):
+    """A packing parameter is impossible (negative count, zero iterations, ...)."""
+
+
+class BackendError(NdpackError, RuntimeError):
+    """A backend is unknown, not installed, or cannot run here."""

@@ -1,0 +1,385 @@
+"""The distance-oracle protocol: the one abstraction every shape in ndpack meets.
+
+Sign convention
+---------------
+``distance(x) < 0`` inside the shape, ``> 0`` outside, ``0`` on its boundary.
+
+Exactness rules
+---------------
+1. Every oracle is *conservative*: its distance ``f`` has the right sign and is 1-Lipschitz,
+   so ``|f(x)|`` never exceeds the true Euclidean distance from ``x`` to the boundary. A ball of
+   radius ``-f(c)`` around an interior point ``c`` is therefore always inside the shape. This is
+   the only property packing validity relies on.
+2. ``exact_inside`` says that ``f`` equals the true distance at every interior point;
+   ``exact_outside`` the same for exterior points. Where a flag is False, ``f`` is only a lower
+   bound of the distance there: spheres stay inside, but may be smaller than the largest that fits.
+3. CSG nodes derive their flags from their children (see :mod:`ndpack.shapes.csg`): for example
+   inside an intersection the distance stays exact, inside a union it is a lower bound.
+
+Gradient
+--------
+``gradient(x)`` is the unit vector along which ``f`` grows fastest. At an interior point it points
+towards the nearest boundary point, at an exterior point away from it; for an exact oracle the
+nearest boundary point is ``x - f(x) * gradient(x)``. Shapes give it analytically where known;
+otherwise it comes from central finite differences.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import BoundsError, DimensionError, OracleError, ShapeError
+
+#: Points sampled for a Monte Carlo volume when none is given.
+DEFAULT_VOLUME_SAMPLES = 400_000
+
+
+@dataclass(frozen=True)
+class Volume:
+    """A shape's volume (area in 2D) with its standard error.
+
+    Attributes
+    ----------
+    value : float
+        The volume, ``inf`` for unbounded shapes.
+    error : float
+        One standard error of a Monte Carlo estimate; ``0.0`` when the value is exact.
+    """
+
+    value: float
+    error: float = 0.0
+
+    @property
+    def exact(self) -> bool:
+        return self.error == 0.0
+
+    def __float__(self) -> float:
+        return float(self.value)
+
+
+def ball_volume(dim: int, radius=1.0):
+    """Volume of the ``dim``-ball of the given radius (scalar or array): pi^(d/2) / Gamma(d/2 + 1) r^d."""
+    unit = math.pi ** (dim / 2) / math.gamma(dim / 2 + 1)
+    return unit * np.asarray(radius, dtype=np.float64) ** dim
+
+
+def as_points(points, dim: int) -> np.ndarray:
+    """Return ``points`` as a C-contiguous ``(n, dim)`` float64 array, or raise a clear error.
+
+    A single point of shape ``(dim,)`` becomes ``(1, dim)``.
+    """
+    array = np.asarray(points, dtype=np.float64)
+    if array.ndim == 1 and array.shape[0] == dim:
+        array = array[None, :]
+    if array.ndim != 2 or array.shape[1] != dim:
+        raise DimensionError(
+            f"expected points of shape (n, {dim}) for a {dim}-D shape, got an array of shape "
+            f"{array.shape}; pass one row per point with {dim} coordinates"
+        )
+    return np.ascontiguousarray(array)
+
+
+def as_vector(values, dim: int, name: str) -> np.ndarray:
+    """Return ``values`` as a finite ``(dim,)`` float64 vector (a scalar is broadcast)."""
+    array = np.asarray(values, dtype=np.float64)
+    if array.ndim == 0:
+        array = np.full(dim, float(array))
+    if array.shape != (dim,):
+        raise DimensionError(f"{name} must have {dim} entries, got shape {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise ShapeError(f"{name} must be finite, got {array}")
+    return array
+
+
+def unit_rows(vectors: np.ndarray) -> np.ndarray:
+    """Normalise the rows of ``vectors`` (n, d); zero rows become the first axis."""
+    norms = np.linalg.norm(vectors, axis=1, keepdims=True)
+    out = np.zeros_like(vectors)
+    ok = norms[:, 0] > 0
+    out[ok] = vectors[ok] / norms[ok]
+    out[~ok, 0] = 1.0
+    return out
+
+
+class Oracle:
+    """Base class of every distance oracle (shapes, CSG nodes, meshes, plug-ins).
+
+    Subclasses set ``dim`` and ``_bounds`` and implement :meth:`_distance`; they may override
+    :meth:`_gradient` or :meth:`_distance_and_gradient` with analytic forms and
+    :meth:`_exact_volume` where the volume is known in closed form. The public methods validate
+    their input; the underscored ones take a trusted ``(n, dim)`` float64 array and are what the
+    packing backends call in their hot loops.
+
+    Attributes
+    ----------
+    dim : int
+        Dimension of the space the shape lives in.
+    exact_inside, exact_outside : bool
+        Whether the distance is exact (not only a lower bound) inside / outside the shape.
+    convex : bool
+        Whether the shape is known to be convex (lets offsets keep exactness).
+    """
+
+    dim: int
+    exact_inside: bool = False
+    exact_outside: bool = False
+    convex: bool = False
+    _bounds: np.ndarray
+
+    # ------------------------------------------------------------------ the protocol
+    @property
+    def bounds(self) -> np.ndarray:
+        """(2, dim) float64: lower and upper corner of an axis-aligned box enclosing the shape.
+
+        Entries may be infinite for unbounded shapes (half-spaces, complements).
+        """
+        return self._bounds
+
+    @property
+    def is_bounded(self) -> bool:
+        return bool(np.all(np.isfinite(self._bounds)))
+
+    @property
+    def exact(self) -> bool:
+        """True when the interior distance is exact (what packing quality depends on)."""
+        return self.exact_inside
+
+    def distance(self, points) -> np.ndarray:
+        """Signed distance, negative inside.
+
+        Parameters
+        ----------
+        points : (n, dim) array_like
+
+        Returns
+        -------
+        (n,) float64
+        """
+        return self._distance(as_points(points, self.dim))
+
+    def gradient(self, points) -> np.ndarray:
+        """Unit direction of steepest increase of the distance, (n, dim) float64."""
+        return self._gradient(as_points(points, self.dim))
+
+    def distance_and_gradient(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """Both at once: ((n,) distances, (n, dim) unit gradients)."""
+        return self._distance_and_gradient(as_points(points, self.dim))
+
+    def contains(self, points) -> np.ndarray:
+        """(n,) bool: whether each point is strictly inside."""
+        return self.distance(points) < 0
+
+    def nearest_boundary_point(self, points) -> np.ndarray:
+        """(n, dim) float64: ``x - f(x) * grad f(x)``; exact where the oracle is exact."""
+        points = as_points(points, self.dim)
+        distances, gradients = self._distance_and_gradient(points)
+        return points - distances[:, None] * gradients
+
+    # ------------------------------------------------------------------ to implement
+    def _distance(self, points: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def _gradient(self, points: np.ndarray) -> np.ndarray:
+        return self._finite_difference_gradient(points)
+
+    def _distance_and_gradient(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return self._distance(points), self._gradient(points)
+
+    def _exact_volume(self) -> float | None:
+        """Closed-form volume, or None when only a Monte Carlo estimate is possible."""
+        return None
+
+    # ------------------------------------------------------------------ shared machinery
+    @property
+    def scale(self) -> float:
+        """A length typical of the shape and its coordinates, for tolerances and steps."""
+        finite = self._bounds[np.isfinite(self._bounds)]
+        if finite.size == 0:
+            return 1.0
+        extent = np.ptp(self._bounds, axis=0) if self.is_bounded else np.zeros(1)
+        return float(max(np.abs(finite).max(), extent.max(), 1e-300))
+
+    def _finite_difference_gradient(self, points: np.ndarray) -> np.ndarray:
+        # Central differences: 2 * dim evaluations, error O(h^2) on smooth parts.
+        step = 1e-6 * self.scale
+        gradient = np.empty_like(points)
+        for axis in range(self.dim):
+            shifted = points.copy()
+            shifted[:, axis] += step
+            forward = self._distance(shifted)
+            shifted[:, axis] -= 2 * step
+            gradient[:, axis] = forward - self._distance(shifted)
+        return unit_rows(gradient)
+
+    def volume(self, samples: int | None = None, seed: int = 0) -> Volume:
+        """Volume (area in 2D): exact where known, else a Monte Carlo estimate with its error.
+
+        Parameters
+        ----------
+        samples : int, optional
+            Monte Carlo sample count (default 400,000); ignored for exact volumes.
+        seed : int
+            Seed of the Monte Carlo sampler, for reproducible estimates.
+        """
+        exact = self._exact_volume()
+        if exact is not None:
+            return Volume(float(exact), 0.0)
+        samples = DEFAULT_VOLUME_SAMPLES if samples is None else int(samples)
+        key = (samples, seed)
+        cache = self.__dict__.setdefault("_volume_cache", {})
+        if key not in cache:
+            cache[key] = monte_carlo_volume(self, samples, seed)
+        return cache[key]
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(dim={self.dim})"
+
+    # ------------------------------------------------------------------ CSG
+    def union(self, *others: Oracle) -> Oracle:
+        from .shapes.csg import Union
+
+        return Union(self, *others)
+
+    def intersection(self, *others: Oracle) -> Oracle:
+        from .shapes.csg import Intersection
+
+        return Intersection(self, *others)
+
+    def difference(self, *others: Oracle) -> Oracle:
+        from .shapes.csg import Difference
+
+        result = self
+        for other in others:
+            result = Difference(result, other)
+        return result
+
+    def complement(self) -> Oracle:
+        from .shapes.csg import Complement
+
+        return Complement(self)
+
+    def translate(self, offset) -> Oracle:
+        from .shapes.csg import Translate
+
+        return Translate(self, offset)
+
+    def rotate(self, matrix, center=None) -> Oracle:
+        """Rotate (or reflect) by an orthogonal ``(dim, dim)`` matrix about ``center`` (default origin)."""
+        from .shapes.csg import Rotate
+
+        return Rotate(self, matrix, center)
+
+    def scale_by(self, factor: float, center=None) -> Oracle:
+        """Scale uniformly by ``factor`` about ``center`` (default origin)."""
+        from .shapes.csg import Scale
+
+        return Scale(self, factor, center)
+
+    def offset(self, amount: float) -> Oracle:
+        """Dilate by ``amount`` (> 0) or erode by ``-amount`` (< 0)."""
+        from .shapes.csg import Offset
+
+        return Offset(self, amount)
+
+    def shell(self, thickness: float) -> Oracle:
+        """The layer of the given thickness centred on the boundary."""
+        from .shapes.csg import Shell
+
+        return Shell(self, thickness)
+
+    def smooth_union(self, other: Oracle, blend: float) -> Oracle:
+        """Union with a fillet of width ``blend``; its distance is a lower bound."""
+        from .shapes.csg import SmoothUnion
+
+        return SmoothUnion(self, other, blend)
+
+    __or__ = union
+    __and__ = intersection
+    __sub__ = difference
+    __invert__ = complement
+
+
+def monte_carlo_volume(oracle: Oracle, samples: int, seed: int) -> Volume:
+    """Estimate the volume by uniform sampling of the bounds; the error is one standard error."""
+    if not oracle.is_bounded:
+        return Volume(math.inf, 0.0)
+    lower, upper = oracle.bounds
+    box_volume = float(np.prod(upper - lower))
+    rng = np.random.default_rng(seed)
+    inside = 0
+    chunk = 65_536
+    for start in range(0, samples, chunk):
+        count = min(chunk, samples - start)
+        points = lower + (upper - lower) * rng.random((count, oracle.dim))
+        inside += int(np.count_nonzero(oracle._distance(points) < 0))
+    fraction = inside / samples
+    # Half a sample of Laplace smoothing keeps the error non-zero for empty or full boxes.
+    smoothed = (inside + 0.5) / (samples + 1.0)
+    error = box_volume * math.sqrt(smoothed * (1 - smoothed) / samples)
+    return Volume(box_volume * fraction, error)
+
+
+def check_compatible(*oracles: Oracle) -> int:
+    """Return the common dimension of ``oracles`` or raise a :class:`DimensionError`."""
+    for oracle in oracles:
+        if not isinstance(oracle, Oracle):
+            raise TypeError(
+                f"expected an ndpack shape (an Oracle), got {type(oracle).__name__}; wrap a "
+                "function with ndpack.Function(fn, dim=..., bounds=...)"
+            )
+    dims = {oracle.dim for oracle in oracles}
+    if len(dims) != 1:
+        names = ", ".join(f"{o!r}" for o in oracles)
+        raise DimensionError(f"cannot combine shapes of different dimensions: {names}")
+    return dims.pop()
+
+
+def check_packable(shape: Oracle, samples_per_face: int = 512, seed: int = 0) -> None:
+    """Raise a clear error if ``shape`` cannot be packed: unbounded, or bounds that cut it.
+
+    The bounds are checked by sampling each face of the bounding box: no face point may lie
+    strictly inside the shape (beyond a relative tolerance of 1e-9).
+    """
+    if not isinstance(shape, Oracle):
+        check_compatible(shape)
+    bounds = shape.bounds
+    if bounds.shape != (2, shape.dim):
+        raise BoundsError(f"bounds must have shape (2, {shape.dim}), got {bounds.shape}")
+    if not shape.is_bounded:
+        raise BoundsError(
+            f"{shape!r} is unbounded (bounds {bounds.tolist()}); intersect it with a bounded "
+            "shape, e.g. shape & ndpack.Box(lower, upper)"
+        )
+    if np.any(bounds[1] <= bounds[0]):
+        raise BoundsError(f"bounds are empty along some axis: lower {bounds[0]}, upper {bounds[1]}")
+    rng = np.random.default_rng(seed)
+    lower, upper = bounds
+    tolerance = 1e-9 * shape.scale
+    for axis in range(shape.dim):
+        for side in (lower, upper):
+            points = lower + (upper - lower) * rng.random((samples_per_face, shape.dim))
+            points[:, axis] = side[axis]
+            distances = shape._distance(points)
+            worst = int(np.argmin(distances))
+            if distances[worst] < -tolerance:
+                raise BoundsError(
+                    f"the bounds of {shape!r} do not enclose it: the point "
+                    f"{np.round(points[worst], 6).tolist()} on the bounding box is inside "
+                    f"(distance {distances[worst]:.3g}); enlarge the bounds"
+                )
+
+
+def check_finite(values: np.ndarray, points: np.ndarray, what: str) -> np.ndarray:
+    """Raise an :class:`OracleError` naming the first offending point if ``values`` has NaN."""
+    bad = np.isnan(values) if values.ndim == 1 else np.isnan(values).any(axis=1)
+    if bad.any():
+        first = int(np.flatnonzero(bad)[0])
+        raise OracleError(
+            f"{what} returned NaN for {int(bad.sum())} of {len(values)} points, first at "
+            f"{points[first].tolist()}; make it return a finite signed distance everywhere "
+            "in its bounds"
+        )
+    return values

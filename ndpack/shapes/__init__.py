@@ -1,0 +1,1 @@
+"""Analytic shapes, CSG and plug-ins: every one a distance oracle."""

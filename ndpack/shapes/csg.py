@@ -1,0 +1,362 @@
+"""Constructive solid geometry on distance oracles of equal dimension.
+
+Boolean nodes (``|``, ``&``, ``-``, ``~``), rigid motions, uniform scaling, offsets, shells and
+a smooth union. Each node keeps the protocol of :mod:`ndpack.oracle`: the result is 1-Lipschitz
+with the right sign, and its exactness flags follow from its children's:
+
+==============  ======================================  =====================================
+node            exact inside when                       exact outside when
+==============  ======================================  =====================================
+union           never (a lower bound)                   every child is exact outside
+intersection    every child is exact inside             never (a lower bound)
+a - b           a exact inside and b exact outside      never
+complement      the child is exact outside              the child is exact inside
+translate,      as the child                            as the child
+rotate, scale
+dilate (r > 0)  child convex and exact on both sides    the child is exact outside
+erode (r < 0)   the child is exact inside               never
+shell           never                                   never
+smooth union    never (a bound of the filleted shape)   never
+==============  ======================================  =====================================
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ShapeError
+from ..oracle import Oracle, as_vector, check_compatible
+
+INFINITE = np.inf
+
+
+class _Boolean(Oracle):
+    """Shared code of n-ary min/max nodes: evaluate all children, keep the active one per point."""
+
+    _pick = staticmethod(np.argmin)
+
+    def __init__(self, *children: Oracle):
+        if len(children) < 2:
+            raise ShapeError(f"{type(self).__name__} needs at least two shapes, got {len(children)}")
+        self.dim = check_compatible(*children)
+        flat = []
+        for child in children:  # (a | b) | c is stored as one node of three children
+            flat.extend(child.children if type(child) is type(self) else [child])
+        self.children = tuple(flat)
+
+    def _distance(self, points):
+        distances = np.stack([child._distance(points) for child in self.children])
+        return distances[self._pick(distances, axis=0), np.arange(len(points))]
+
+    def _distance_and_gradient(self, points):
+        pairs = [child._distance_and_gradient(points) for child in self.children]
+        distances = np.stack([d for d, _ in pairs])
+        gradients = np.stack([g for _, g in pairs])
+        active = self._pick(distances, axis=0)
+        rows = np.arange(len(points))
+        return distances[active, rows], gradients[active, rows]
+
+    def _gradient(self, points):
+        return self._distance_and_gradient(points)[1]
+
+    def __repr__(self):
+        return f"{type(self).__name__}({', '.join(map(repr, self.children))})"
+
+
+class Union(_Boolean):
+    """Points inside any child: ``min`` of the distances."""
+
+    _pick = staticmethod(np.argmin)
+
+    def __init__(self, *children: Oracle):
+        super().__init__(*children)
+        self.exact_inside = False
+        self.exact_outside = all(c.exact_outside for c in self.children)
+        self.convex = False
+        bounds = np.stack([c.bounds for c in self.children])
+        self._bounds = np.stack([bounds[:, 0].min(axis=0), bounds[:, 1].max(axis=0)])
+
+
+class Intersection(_Boolean):
+    """Points inside every child: ``max`` of the distances."""
+
+    _pick = staticmethod(np.argmax)
+
+    def __init__(self, *children: Oracle):
+        super().__init__(*children)
+        self.exact_inside = all(c.exact_inside for c in self.children)
+        self.exact_outside = False
+        self.convex = all(c.convex for c in self.children)
+        bounds = np.stack([c.bounds for c in self.children])
+        self._bounds = np.stack([bounds[:, 0].max(axis=0), bounds[:, 1].min(axis=0)])
+        if np.any(self._bounds[0] >= self._bounds[1]):
+            raise ShapeError(
+                f"the intersection of {', '.join(map(repr, self.children))} is empty: their "
+                "bounding boxes do not overlap"
+            )
+
+
+class Complement(Oracle):
+    """Everything outside the child: the distance negated."""
+
+    def __init__(self, child: Oracle):
+        self.dim = check_compatible(child)
+        self.child = child
+        self.exact_inside = child.exact_outside
+        self.exact_outside = child.exact_inside
+        self._bounds = np.stack([np.full(self.dim, -INFINITE), np.full(self.dim, INFINITE)])
+
+    def _distance(self, points):
+        return -self.child._distance(points)
+
+    def _distance_and_gradient(self, points):
+        distances, gradients = self.child._distance_and_gradient(points)
+        return -distances, -gradients
+
+    def _gradient(self, points):
+        return -self.child._gradient(points)
+
+    def _exact_volume(self):
+        return np.inf
+
+    def complement(self):
+        return self.child
+
+    __invert__ = complement
+
+    def __repr__(self):
+        return f"~{self.child!r}"
+
+
+class Difference(Oracle):
+    """Points inside ``a`` and outside ``b``: ``max(a, -b)``."""
+
+    def __init__(self, a: Oracle, b: Oracle):
+        self.dim = check_compatible(a, b)
+        self.a, self.b = a, b
+        self.exact_inside = a.exact_inside and b.exact_outside
+        self.exact_outside = False
+        self._bounds = a.bounds.copy()
+
+    def _distance(self, points):
+        return np.maximum(self.a._distance(points), -self.b._distance(points))
+
+    def _distance_and_gradient(self, points):
+        da, ga = self.a._distance_and_gradient(points)
+        db, gb = self.b._distance_and_gradient(points)
+        use_b = -db > da
+        return np.where(use_b, -db, da), np.where(use_b[:, None], -gb, ga)
+
+    def _gradient(self, points):
+        return self._distance_and_gradient(points)[1]
+
+    def __repr__(self):
+        return f"({self.a!r} - {self.b!r})"
+
+
+class _Transformed(Oracle):
+    """A child seen through a map: subclasses define ``_to_child`` and ``_from_child_gradient``."""
+
+    def __init__(self, child: Oracle):
+        self.dim = check_compatible(child)
+        self.child = child
+        self.exact_inside = child.exact_inside
+        self.exact_outside = child.exact_outside
+        self.convex = child.convex
+
+    def _distance(self, points):
+        return self._distance_factor * self.child._distance(self._to_child(points))
+
+    def _distance_and_gradient(self, points):
+        distances, gradients = self.child._distance_and_gradient(self._to_child(points))
+        return self._distance_factor * distances, self._from_child_gradient(gradients)
+
+    def _gradient(self, points):
+        return self._distance_and_gradient(points)[1]
+
+    _distance_factor = 1.0
+
+    def _from_child_gradient(self, gradients):
+        return gradients
+
+    def _exact_volume(self):
+        volume = self.child._exact_volume()
+        return None if volume is None else volume * self._distance_factor**self.dim
+
+
+class Translate(_Transformed):
+    """The child moved by ``offset`` (dim,)."""
+
+    def __init__(self, child: Oracle, offset):
+        super().__init__(child)
+        self.offset = as_vector(offset, self.dim, "translation offset")
+        self._bounds = child.bounds + self.offset
+
+    def _to_child(self, points):
+        return points - self.offset
+
+    def __repr__(self):
+        return f"{self.child!r}.translate({self.offset.tolist()})"
+
+
+class Rotate(_Transformed):
+    """The child rotated (or reflected) by an orthogonal ``matrix`` (dim, dim) about ``center``."""
+
+    def __init__(self, child: Oracle, matrix, center=None):
+        super().__init__(child)
+        matrix = np.asarray(matrix, dtype=np.float64)
+        if matrix.shape != (self.dim, self.dim):
+            raise ShapeError(f"rotation matrix must be ({self.dim}, {self.dim}), got {matrix.shape}")
+        error = np.abs(matrix.T @ matrix - np.eye(self.dim)).max()
+        if not error < 1e-9:
+            raise ShapeError(
+                f"rotation matrix is not orthogonal (|M^T M - I| = {error:.2g}); a distance "
+                "survives only rotations and reflections: use scale_by() for uniform scaling"
+            )
+        self.matrix = matrix
+        self.center = np.zeros(self.dim) if center is None else as_vector(center, self.dim, "center")
+        if child.is_bounded:
+            # The AABB of a rotated box: centre maps, half-extents go through |M|.
+            lower, upper = child.bounds
+            middle = self.matrix @ ((lower + upper) / 2 - self.center) + self.center
+            half = np.abs(self.matrix) @ ((upper - lower) / 2)
+            self._bounds = np.stack([middle - half, middle + half])
+        else:
+            self._bounds = np.stack([np.full(self.dim, -INFINITE), np.full(self.dim, INFINITE)])
+
+    def _to_child(self, points):
+        # Row vectors: x_child = M^T (x - c) + c  <=>  (x - c) @ M + c.
+        return (points - self.center) @ self.matrix + self.center
+
+    def _from_child_gradient(self, gradients):
+        return gradients @ self.matrix.T
+
+    def __repr__(self):
+        return f"{self.child!r}.rotate(...)"
+
+
+class Scale(_Transformed):
+    """The child scaled uniformly by ``factor`` > 0 about ``center``: ``s * f((x - c) / s + c)``."""
+
+    def __init__(self, child: Oracle, factor: float, center=None):
+        super().__init__(child)
+        factor = float(factor)
+        if not (np.isfinite(factor) and factor > 0):
+            raise ShapeError(
+                f"scale factor must be a positive number, got {factor}; for a mirror image use "
+                "rotate() with a reflection matrix"
+            )
+        self.factor = factor
+        self._distance_factor = factor
+        self.center = np.zeros(self.dim) if center is None else as_vector(center, self.dim, "center")
+        self._bounds = (child.bounds - self.center) * factor + self.center
+
+    def _to_child(self, points):
+        return (points - self.center) / self.factor + self.center
+
+    def __repr__(self):
+        return f"{self.child!r}.scale_by({self.factor})"
+
+
+class Offset(Oracle):
+    """The child dilated by ``amount`` > 0 or eroded by ``-amount``: ``f - amount``."""
+
+    def __init__(self, child: Oracle, amount: float):
+        self.dim = check_compatible(child)
+        self.child = child
+        self.amount = float(amount)
+        if not np.isfinite(self.amount):
+            raise ShapeError(f"offset amount must be finite, got {amount}")
+        self.convex = child.convex
+        if self.amount >= 0:
+            self.exact_inside = child.convex and child.exact_inside and child.exact_outside
+            self.exact_outside = child.exact_outside
+            self._bounds = child.bounds + np.array([[-self.amount], [self.amount]])
+        else:
+            self.exact_inside = child.exact_inside
+            self.exact_outside = False
+            self._bounds = child.bounds.copy()
+
+    def _distance(self, points):
+        return self.child._distance(points) - self.amount
+
+    def _distance_and_gradient(self, points):
+        distances, gradients = self.child._distance_and_gradient(points)
+        return distances - self.amount, gradients
+
+    def _gradient(self, points):
+        return self.child._gradient(points)
+
+    def __repr__(self):
+        return f"{self.child!r}.offset({self.amount})"
+
+
+class Shell(Oracle):
+    """The layer of ``thickness`` centred on the child's boundary: ``|f| - thickness / 2``."""
+
+    def __init__(self, child: Oracle, thickness: float):
+        self.dim = check_compatible(child)
+        self.child = child
+        self.thickness = float(thickness)
+        if not (np.isfinite(self.thickness) and self.thickness > 0):
+            raise ShapeError(f"shell thickness must be positive, got {thickness}")
+        self._bounds = child.bounds + np.array([[-self.thickness / 2], [self.thickness / 2]])
+
+    def _distance(self, points):
+        return np.abs(self.child._distance(points)) - self.thickness / 2
+
+    def _distance_and_gradient(self, points):
+        distances, gradients = self.child._distance_and_gradient(points)
+        sign = np.where(distances < 0, -1.0, 1.0)
+        return np.abs(distances) - self.thickness / 2, gradients * sign[:, None]
+
+    def _gradient(self, points):
+        return self._distance_and_gradient(points)[1]
+
+    def __repr__(self):
+        return f"{self.child!r}.shell({self.thickness})"
+
+
+class SmoothUnion(Oracle):
+    """Union of ``a`` and ``b`` with a fillet of width ``blend`` (polynomial smooth minimum).
+
+    ``h = clip(1/2 + (b - a) / (2 k), 0, 1)``, ``f = h a + (1 - h) b - k h (1 - h)``. Its
+    gradient is ``h grad a + (1 - h) grad b``, so it stays 1-Lipschitz: a lower bound of the
+    distance to its own (filleted) boundary, never exact.
+    """
+
+    def __init__(self, a: Oracle, b: Oracle, blend: float):
+        self.dim = check_compatible(a, b)
+        self.a, self.b = a, b
+        self.blend = float(blend)
+        if not (np.isfinite(self.blend) and self.blend > 0):
+            raise ShapeError(f"smooth union blend must be positive, got {blend}; use | for a sharp union")
+        union = np.stack([a.bounds, b.bounds])
+        # The fillet adds material where both distances are below blend / 4.
+        pad = self.blend / 4
+        self._bounds = np.stack([union[:, 0].min(axis=0) - pad, union[:, 1].max(axis=0) + pad])
+
+    def _weights(self, da, db):
+        return np.clip(0.5 + (db - da) / (2 * self.blend), 0.0, 1.0)
+
+    def _distance(self, points):
+        da, db = self.a._distance(points), self.b._distance(points)
+        h = self._weights(da, db)
+        return h * da + (1 - h) * db - self.blend * h * (1 - h)
+
+    def _distance_and_gradient(self, points):
+        da, ga = self.a._distance_and_gradient(points)
+        db, gb = self.b._distance_and_gradient(points)
+        h = self._weights(da, db)
+        distances = h * da + (1 - h) * db - self.blend * h * (1 - h)
+        gradients = h[:, None] * ga + (1 - h)[:, None] * gb
+        norms = np.linalg.norm(gradients, axis=1, keepdims=True)
+        # Opposite child gradients can cancel; keep the raw one there rather than divide by ~0.
+        gradients = np.where(norms > 1e-12, gradients / np.maximum(norms, 1e-300), ga)
+        return distances, gradients
+
+    def _gradient(self, points):
+        return self._distance_and_gradient(points)[1]
+
+    def __repr__(self):
+        return f"{self.a!r}.smooth_union({self.b!r}, {self.blend})"

@@ -1,0 +1,245 @@
+"""Plug-in oracles: a user's vectorised NumPy function used as a shape.
+
+Example::
+
+    @ndpack.oracle(dim=2, bounds=[[-1, -1], [1, 1]])
+    def disc(p):
+        return np.linalg.norm(p, axis=1) - 1.0
+
+    disc.distance([[0.0, 0.0]])  # array([-1.])
+"""
+
+from __future__ import annotations
+
+import operator
+
+import numpy as np
+
+from ..errors import BoundsError, DimensionError, OracleError, ParameterError
+from ..oracle import Oracle, check_finite, unit_rows
+
+
+def _check_values(values, expected: tuple, points: np.ndarray, what: str, hint: str) -> np.ndarray:
+    """Turn a user function's result into float64 of the ``expected`` shape, finite, or raise.
+
+    ``what`` names the function in messages, ``hint`` says what it should return.
+    """
+    try:
+        array = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise OracleError(
+            f"{what} returned {type(values).__name__}, which is not an array of numbers "
+            f"({error}); {hint}"
+        ) from None
+    if array.shape != expected:
+        extra = ""
+        if array.ndim == 0:
+            extra = " (a single number: it must be vectorised, taking all points at once)"
+        raise OracleError(
+            f"{what} returned an array of shape {array.shape} for {len(points)} points, expected "
+            f"{expected}{extra}; {hint}"
+        )
+    check_finite(array, points, what)
+    # check_finite lets infinities through, but an infinite distance is never 1-Lipschitz and
+    # -inf would let a packer place an infinite sphere.
+    infinite = np.isinf(array) if array.ndim == 1 else np.isinf(array).any(axis=1)
+    if infinite.any():
+        first = int(np.flatnonzero(infinite)[0])
+        raise OracleError(
+            f"{what} returned inf for {int(infinite.sum())} of {len(points)} points, first at "
+            f"{points[first].tolist()}; make it return a finite signed distance everywhere in "
+            "its bounds"
+        )
+    return array
+
+
+class Function(Oracle):
+    """A user's vectorised distance function, used as a shape.
+
+    Parameters
+    ----------
+    fn : callable
+        ``fn(points) -> distances`` with ``points`` a ``(n, dim)`` float64 array and distances a
+        ``(n,)`` array: negative inside, positive outside, and 1-Lipschitz (see
+        :meth:`check_lipschitz`). It receives a copy of the points, so it may modify them.
+    dim : int
+        Dimension of the space, at least 1.
+    bounds : (2, dim) array_like
+        Lower and upper corner of a finite box that encloses the shape.
+    exact_inside, exact_outside : bool
+        Promise that ``fn`` is the true distance inside / outside (not only a lower bound).
+    gradient : callable, optional
+        ``gradient(points) -> (n, dim)`` direction of steepest increase (normalised here).
+        Without it the gradient comes from central finite differences.
+    name : str, optional
+        Name used in messages; defaults to the function's ``__name__``.
+
+    Notes
+    -----
+    Exceptions raised inside ``fn`` or ``gradient`` propagate unchanged.
+    """
+
+    convex = False
+
+    def __init__(
+        self, fn, dim, bounds, exact_inside=False, exact_outside=False, gradient=None, name=None
+    ):
+        if not callable(fn):
+            raise TypeError(
+                f"fn must be a callable taking an (n, dim) array of points, got "
+                f"{type(fn).__name__}; pass the function itself, e.g. Function(my_fn, ...), "
+                "not the result of calling it"
+            )
+        if gradient is not None and not callable(gradient):
+            raise TypeError(
+                f"gradient must be a callable taking an (n, dim) array of points, or None, got "
+                f"{type(gradient).__name__}"
+            )
+        if isinstance(dim, bool):  # True is an int, but surely a mistake here
+            raise DimensionError(f"dim must be an integer >= 1, got {dim!r}")
+        try:
+            dim = operator.index(dim)
+        except TypeError:
+            raise DimensionError(f"dim must be an integer >= 1, got {dim!r}") from None
+        if dim < 1:
+            raise DimensionError(f"dim must be an integer >= 1, got {dim}")
+
+        try:
+            bounds = np.array(bounds, dtype=np.float64)
+        except (TypeError, ValueError) as error:
+            raise BoundsError(f"bounds must be a (2, {dim}) array of numbers: {error}") from None
+        if bounds.shape != (2, dim):
+            raise BoundsError(
+                f"bounds must have shape (2, {dim}), [lower corner, upper corner], got shape "
+                f"{bounds.shape}"
+            )
+        if not np.all(np.isfinite(bounds)):
+            raise BoundsError(f"bounds must be finite, got {bounds.tolist()}")
+        if np.any(bounds[0] >= bounds[1]):
+            raise BoundsError(
+                f"bounds need lower < upper along every axis, got lower {bounds[0].tolist()}, "
+                f"upper {bounds[1].tolist()}"
+            )
+
+        self.fn = fn
+        self.gradient_fn = gradient
+        self.dim = dim
+        self._bounds = bounds
+        self.exact_inside = bool(exact_inside)
+        self.exact_outside = bool(exact_outside)
+        self.name = str(name) if name is not None else getattr(fn, "__name__", type(fn).__name__)
+        if getattr(fn, "__doc__", None):
+            self.__doc__ = fn.__doc__  # help() on a decorated function shows its own docstring
+
+    def __call__(self, points) -> np.ndarray:
+        """Same as :meth:`distance`, so a decorated function can still be called."""
+        return self.distance(points)
+
+    # ------------------------------------------------------------------ oracle
+    def _distance(self, points: np.ndarray) -> np.ndarray:
+        # A copy, so that a function working in place cannot corrupt the caller's array.
+        values = self.fn(points.copy())
+        return _check_values(
+            values, (len(points),), points, f"the distance function {self.name!r}",
+            "return one distance per point, shape (n,)",
+        )
+
+    def _gradient(self, points: np.ndarray) -> np.ndarray:
+        if self.gradient_fn is None:
+            return self._finite_difference_gradient(points)
+        values = self.gradient_fn(points.copy())
+        values = _check_values(
+            values, (len(points), self.dim), points, f"the gradient function of {self.name!r}",
+            f"return one gradient per point, shape (n, {self.dim})",
+        )
+        return unit_rows(values)
+
+    # ------------------------------------------------------------------ checks
+    def check_lipschitz(self, samples: int = 2000, seed: int = 0) -> float:
+        """Check on random pairs of points that the function is 1-Lipschitz.
+
+        Half the pairs are independent uniform points of the bounds, half are close pairs
+        (a step of 1e-3 of the box diagonal), which measure the local slope.
+
+        Parameters
+        ----------
+        samples : int
+            Number of pairs.
+        seed : int
+            Seed of the sampler.
+
+        Returns
+        -------
+        float
+            The largest observed ratio ``|f(x) - f(y)| / |x - y|``.
+
+        Raises
+        ------
+        OracleError
+            If some pair has a ratio above ``1 + 1e-6``.
+        """
+        if isinstance(samples, bool) or int(samples) != samples or samples < 1:
+            raise ParameterError(f"samples must be a positive integer, got {samples!r}")
+        samples = int(samples)
+        rng = np.random.default_rng(seed)
+        lower, upper = self._bounds
+        first = lower + (upper - lower) * rng.random((samples, self.dim))
+        second = lower + (upper - lower) * rng.random((samples, self.dim))
+        close = samples // 2
+        step = 1e-3 * float(np.linalg.norm(upper - lower))
+        directions = unit_rows(rng.standard_normal((close, self.dim)))
+        second[:close] = np.clip(first[:close] + step * directions, lower, upper)
+
+        values = self._distance(np.concatenate([first, second]))
+        change = np.abs(values[:samples] - values[samples:])
+        length = np.linalg.norm(first - second, axis=1)
+        moved = length > 0  # clipping can, rarely, bring a point back onto its partner
+        ratios = change[moved] / length[moved]
+        if ratios.size == 0:
+            return 0.0
+        worst = int(np.argmax(ratios))
+        largest = float(ratios[worst])
+        if largest > 1 + 1e-6:
+            x, y = first[moved][worst], second[moved][worst]
+            raise OracleError(
+                f"the distance function {self.name!r} is not a conservative distance (Lipschitz "
+                f"constant at least {largest:.6g}, between {np.round(x, 6).tolist()} and "
+                f"{np.round(y, 6).tolist()}); divide it by {largest:.6g} to make it one"
+            )
+        return largest
+
+    def __repr__(self) -> str:
+        return f"Function({self.name!r}, dim={self.dim})"
+
+
+def oracle(dim, bounds=None, **flags):
+    """Decorator that turns a vectorised distance function into a :class:`Function`.
+
+    Parameters
+    ----------
+    dim : int
+    bounds : (2, dim) array_like
+        Required; the default only lets a bare ``@oracle`` get a clear error.
+    **flags
+        ``exact_inside``, ``exact_outside``, ``gradient``, ``name``: passed to :class:`Function`.
+
+    Examples
+    --------
+    >>> @oracle(dim=2, bounds=[[-1, -1], [1, 1]])
+    ... def disc(p):
+    ...     return np.linalg.norm(p, axis=1) - 1.0
+    >>> disc
+    Function('disc', dim=2)
+    """
+    if callable(dim):
+        raise TypeError(
+            "oracle needs its arguments: write @ndpack.oracle(dim=..., bounds=...) above the "
+            "function, not a bare @ndpack.oracle"
+        )
+    if bounds is None:
+        raise BoundsError(f"oracle needs bounds: a (2, {dim}) box [lower corner, upper corner]")
+
+    def wrap(fn) -> Function:
+        return Function(fn, dim, bounds, **flags)
+
+    return wrap

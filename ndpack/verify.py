@@ -1,0 +1,167 @@
+"""Independent float64 check of a packing: every sphere inside the shape, no two overlapping.
+
+Containment uses the shape's own oracle, which is conservative (see :mod:`ndpack.oracle`), so a
+sphere that passes is truly inside. Overlaps are found with SciPy k-d trees, one per octave of
+radius, so that a few large spheres do not make every query reach across the whole packing.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .errors import DimensionError, NdpackError
+from .oracle import as_points
+
+#: Default tolerance, as a fraction of the shape's scale: float64 rounding of distances is about
+#: 1e-16 of it, and the driver keeps a margin of 1e-10 (ndpack.protosphere.SAFETY_MARGIN).
+DEFAULT_TOLERANCE = 1e-12
+
+
+@dataclass
+class Verification:
+    """What :func:`verify` found.
+
+    Attributes
+    ----------
+    ok : bool
+        True when nothing exceeds the tolerance.
+    count : int
+        Number of spheres checked.
+    tol : float
+        Absolute tolerance used.
+    worst_containment : float
+        Largest ``distance(center) + radius``: how far the worst sphere pokes out (< 0: inside).
+    worst_overlap : float
+        Largest ``r_i + r_j - |c_i - c_j|`` over near pairs (< 0: the tightest pair's gap).
+    outside : (k,) int64
+        Spheres that poke out by more than ``tol``.
+    overlapping : (k, 2) int64
+        Pairs that overlap by more than ``tol``.
+    """
+
+    ok: bool
+    count: int
+    tol: float
+    worst_containment: float
+    worst_overlap: float
+    outside: np.ndarray = field(repr=False)
+    overlapping: np.ndarray = field(repr=False)
+
+    def __bool__(self) -> bool:
+        return self.ok
+
+    def summary(self) -> str:
+        verdict = "valid" if self.ok else "INVALID"
+        return (
+            f"{verdict}: {self.count} spheres, {len(self.outside)} outside, "
+            f"{len(self.overlapping)} overlapping pairs (worst poke-out {self.worst_containment:.3g}, "
+            f"worst overlap {self.worst_overlap:.3g}, tolerance {self.tol:.3g})"
+        )
+
+    __str__ = summary
+
+    def raise_if_invalid(self) -> None:
+        """Raise :class:`~ndpack.errors.NdpackError` with the summary unless the packing is valid."""
+        if not self.ok:
+            raise NdpackError(f"packing is invalid: {self.summary()}")
+
+
+def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0):
+    """Pairs of spheres that overlap by more than ``tol``, and the worst overlap.
+
+    Parameters
+    ----------
+    centers : (n, d) float64
+    radii : (n,) float64, positive
+    tol : float
+
+    Returns
+    -------
+    pairs : (k, 2) int64
+        ``i < j`` for each overlapping pair.
+    worst : float
+        Largest ``r_i + r_j - |c_i - c_j|`` among the near pairs examined; ``-inf`` if none.
+    """
+    if len(radii) < 2:
+        return np.zeros((0, 2), dtype=np.int64), -np.inf
+    octave = np.floor(np.log2(radii)).astype(np.int64)
+    firsts, seconds = [], []
+    for level in np.unique(octave):
+        members = np.flatnonzero(octave == level)
+        tree = cKDTree(centers[members])
+        largest = radii[members].max()
+        # Each pair is found from the larger sphere's side, querying the smaller one's octave.
+        queries = np.flatnonzero(octave >= level)
+        found = tree.query_ball_point(
+            centers[queries], radii[queries] + largest + tol, return_sorted=False
+        )
+        lengths = np.fromiter((len(hits) for hits in found), dtype=np.int64, count=len(found))
+        if lengths.sum() == 0:
+            continue
+        firsts.append(np.repeat(queries, lengths))
+        seconds.append(members[np.concatenate([np.asarray(h, dtype=np.int64) for h in found])])
+    if not firsts:
+        return np.zeros((0, 2), dtype=np.int64), -np.inf
+    pairs = np.stack([np.concatenate(firsts), np.concatenate(seconds)], axis=1)
+    pairs = np.unique(np.sort(pairs[pairs[:, 0] != pairs[:, 1]], axis=1), axis=0)
+    if len(pairs) == 0:
+        return pairs, -np.inf
+    gaps = np.linalg.norm(centers[pairs[:, 0]] - centers[pairs[:, 1]], axis=1)
+    overlap = radii[pairs[:, 0]] + radii[pairs[:, 1]] - gaps
+    return pairs[overlap > tol], float(overlap.max())
+
+
+def verify(packing, shape=None, tol: float | None = None, radii=None) -> Verification:
+    """Check a packing in float64: every sphere inside ``shape``, no two overlapping.
+
+    Parameters
+    ----------
+    packing : Packing or (n, d) array_like
+        A packing, or sphere centres (then pass ``radii`` too).
+    shape : Oracle, optional
+        The shape; defaults to ``packing.shape``.
+    tol : float, optional
+        Absolute tolerance; default ``1e-12 * shape.scale``.
+    radii : (n,) array_like, optional
+        Radii when ``packing`` is an array of centres.
+
+    Returns
+    -------
+    Verification
+        Truthy when valid; ``summary()`` reports the worst violations.
+    """
+    if radii is None:
+        centers, radii = packing.centers, packing.radii
+        shape = packing.shape if shape is None else shape
+    else:
+        centers = packing
+    if shape is None:
+        raise NdpackError("verify() needs the shape: pass verify(packing, shape)")
+    centers = as_points(centers, shape.dim) if len(centers) else np.zeros((0, shape.dim))
+    radii = np.asarray(radii, dtype=np.float64)
+    if radii.shape != (len(centers),):
+        raise DimensionError(f"expected {len(centers)} radii, got an array of shape {radii.shape}")
+    tol = DEFAULT_TOLERANCE * shape.scale if tol is None else float(tol)
+    bad_radius = ~(np.isfinite(radii) & (radii > 0))
+    if bad_radius.any():
+        raise NdpackError(
+            f"{int(bad_radius.sum())} radii are not positive finite numbers, first at index "
+            f"{int(np.flatnonzero(bad_radius)[0])}"
+        )
+    if len(radii) == 0:
+        return Verification(True, 0, tol, -np.inf, -np.inf, np.zeros(0, np.int64), np.zeros((0, 2), np.int64))
+    poke_out = shape._distance(centers) + radii
+    outside = np.flatnonzero(~(poke_out <= tol))  # NaN counts as outside
+    pairs, worst_overlap = overlapping_pairs(centers, radii, tol)
+    return Verification(
+        ok=len(outside) == 0 and len(pairs) == 0,
+        count=len(radii),
+        tol=tol,
+        worst_containment=float(np.nanmax(poke_out)),
+        worst_overlap=worst_overlap,
+        outside=outside,
+        overlapping=pairs,
+    )
