@@ -1,1 +1,37 @@
-"""ndpack: fill any shape, in any dimension, with non-overlapping spheres."""
+"""ndpack: fill any shape, in any dimension, with non-overlapping spheres.
+
+Give it a distance oracle (signed distance, negative inside) and it packs spheres greedily,
+largest first, with the ProtoSphere algorithm::
+
+    import ndpack as nd
+    part = nd.Box([0, 0, 0], [1, 1, 1]) - nd.Ball([1, 1, 1], 0.6)
+    packing = nd.pack(part, n=1000, seed=0)
+    packing.fill, packing.verify()
+
+Everything public is re-exported here; the rest is internal.
+"""
+
+from .errors import (
+    BackendError,
+    BoundsError,
+    DimensionError,
+    NdpackError,
+    OracleError,
+    ParameterError,
+    ShapeError,
+)
+from .oracle import Oracle, Volume, ball_volume
+from .packing import Packing, RoundStats
+from .protosphere import pack
+from .rotation import rotation
+from .shapes import *  # noqa: F401,F403  (the shape classes, listed in shapes.__all__)
+from .shapes import __all__ as _shape_names
+from .verify import Verification, verify
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "BackendError", "BoundsError", "DimensionError", "NdpackError", "OracleError", "Oracle",
+    "Packing", "ParameterError", "RoundStats", "ShapeError", "Verification", "Volume",
+    "ball_volume", "pack", "rotation", "verify", *_shape_names,
+]

@@ -373,12 +373,12 @@ def check_packable(shape: Oracle, samples_per_face: int = 512, seed: int = 0) ->
 
 
 def check_finite(values: np.ndarray, points: np.ndarray, what: str) -> np.ndarray:
-    """Raise an :class:`OracleError` naming the first offending point if ``values`` has NaN."""
-    bad = np.isnan(values) if values.ndim == 1 else np.isnan(values).any(axis=1)
+    """Raise an :class:`OracleError` naming the first offending point if ``values`` is not finite."""
+    bad = ~np.isfinite(values) if values.ndim == 1 else ~np.isfinite(values).all(axis=1)
     if bad.any():
         first = int(np.flatnonzero(bad)[0])
         raise OracleError(
-            f"{what} returned NaN for {int(bad.sum())} of {len(values)} points, first at "
+            f"{what} returned NaN or infinity for {int(bad.sum())} of {len(values)} points, first at "
             f"{points[first].tolist()}; make it return a finite signed distance everywhere "
             "in its bounds"
         )

@@ -5,7 +5,7 @@ import pytest
 
 from ndpack.errors import BoundsError, DimensionError, OracleError, ParameterError, ShapeError
 from ndpack.oracle import Oracle
-from ndpack.shapes.plugin import Function, oracle
+from ndpack.shapes.plugin import Function, plugin
 
 SQUARE_BOUNDS = [[-1.5, -1.5], [1.5, 1.5]]
 
@@ -64,13 +64,13 @@ def test_nan_raises_oracle_error_naming_the_point():
         shape.distance([[0, 0], [1.25, 0.5]])
     message = str(info.value)
     assert "'holey'" in message
-    assert "NaN for 1 of 2 points" in message
+    assert "NaN or infinity for 1 of 2 points" in message
     assert "[1.25, 0.5]" in message
 
 
 def test_infinite_value_raises():
     shape = Function(lambda p: np.full(len(p), -np.inf), 2, SQUARE_BOUNDS)
-    with pytest.raises(OracleError, match="returned inf for 3 of 3 points"):
+    with pytest.raises(OracleError, match="returned NaN or infinity for 3 of 3 points"):
         shape.distance(np.zeros((3, 2)))
 
 
@@ -182,12 +182,12 @@ def test_bad_user_gradient_raises():
         g[0, 1] = np.nan
         return g
 
-    with pytest.raises(OracleError, match="gradient function of 'disc' returned NaN"):
+    with pytest.raises(OracleError, match="gradient function of 'disc' returned NaN or infinity"):
         Function(disc, 2, SQUARE_BOUNDS, gradient=nan_gradient).gradient(random_points(4))
 
 
 def test_decorator():
-    @oracle(dim=2, bounds=[[-1, -1], [1, 1]], exact_inside=True)
+    @plugin(dim=2, bounds=[[-1, -1], [1, 1]], exact_inside=True)
     def unit_disc(p):
         """Docstring kept."""
         return np.linalg.norm(p, axis=1) - 1.0
@@ -201,9 +201,9 @@ def test_decorator():
 
 
 def test_decorator_without_arguments_explains():
-    with pytest.raises(TypeError, match=r"@ndpack.oracle\(dim=..., bounds=...\)"):
+    with pytest.raises(TypeError, match=r"@ndpack.plugin\(dim=..., bounds=...\)"):
 
-        @oracle
+        @plugin
         def unit_disc(p):
             return disc(p)
 
@@ -215,7 +215,7 @@ def test_repr_and_name():
 
 
 def test_four_dimensional_plugin():
-    @oracle(dim=4, bounds=[[-2] * 4, [2] * 4], exact_inside=True, exact_outside=True)
+    @plugin(dim=4, bounds=[[-2] * 4, [2] * 4], exact_inside=True, exact_outside=True)
     def hyperball(p):
         return np.linalg.norm(p - 0.5, axis=1) - 1.5
 
@@ -230,5 +230,5 @@ def test_four_dimensional_plugin():
 
 
 def test_decorator_without_bounds_explains():
-    with pytest.raises(BoundsError, match=r"oracle needs bounds: a \(2, 3\) box"):
-        oracle(dim=3)
+    with pytest.raises(BoundsError, match=r"plugin needs bounds: a \(2, 3\) box"):
+        plugin(dim=3)

@@ -1,1 +1,36 @@
-"""Analytic shapes, CSG and plug-ins: every one a distance oracle."""
+"""Analytic shapes, CSG and plug-ins: every one a distance oracle (see :mod:`ndpack.oracle`)."""
+
+from .csg import (
+    Complement,
+    Difference,
+    Intersection,
+    Offset,
+    Rotate,
+    Scale,
+    Shell,
+    SmoothUnion,
+    Translate,
+    Union,
+)
+from .plugin import Function, plugin
+from .polygon import Polygon
+from .primitives import (
+    Ball,
+    Box,
+    Capsule,
+    ConvexPolytope,
+    Cylinder,
+    Ellipsoid,
+    HalfSpace,
+    RoundedBox,
+    Simplex,
+    Slab,
+    Torus,
+)
+
+__all__ = [
+    "Ball", "Box", "Capsule", "Complement", "ConvexPolytope", "Cylinder", "Difference",
+    "Ellipsoid", "Function", "HalfSpace", "Intersection", "Offset", "Polygon", "Rotate",
+    "RoundedBox", "Scale", "Shell", "Simplex", "Slab", "SmoothUnion", "Torus", "Translate",
+    "Union", "plugin",
+]

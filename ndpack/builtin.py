@@ -1,0 +1,75 @@
+"""Named shapes for the command line and quick experiments: ``box:dim=4``, ``demo``.
+
+A spec is ``name`` or ``name:key=value,key=value``; every shape takes ``dim`` where it makes
+sense. :func:`from_spec` turns a spec into an oracle and explains any mistake.
+"""
+
+from __future__ import annotations
+
+
+import numpy as np
+
+from .errors import ShapeError
+from .shapes import Ball, Box, Cylinder, Polygon, RoundedBox, Simplex, Torus
+
+
+def _demo(dim=3):
+    """A 3-D machined part: rounded block minus a bore and a spherical pocket."""
+    if dim != 3:
+        raise ShapeError("the demo part is 3-D only; drop dim= or pick another shape")
+    block = RoundedBox([-1.0, -0.6, -0.4], [1.0, 0.6, 0.4], 0.15)
+    bore = Cylinder([0.45, 0.0, -1.0], [0.45, 0.0, 1.0], 0.25)
+    pocket = Ball([-0.5, 0.0, 0.45], 0.35)
+    return block - bore - pocket
+
+
+def _annulus(dim=2, inner=0.5):
+    """A 2-D ring (a 256-gon with a hole) or, in any dimension, a ball minus a ball."""
+    if dim == 2:
+        outer = Polygon.regular(256, 1.0)
+        hole = Polygon.regular(256, float(inner)).outer[::-1]
+        return Polygon(outer.outer, holes=[hole])
+    return Ball(np.zeros(dim), 1.0) - Ball(np.zeros(dim), float(inner))
+
+
+def _simplex(dim=3):
+    vertices = np.vstack([np.zeros(dim), np.eye(dim)])
+    return Simplex(vertices)
+
+
+BUILTIN = {
+    "demo": _demo,
+    "box": lambda dim=3: Box(np.zeros(dim), np.ones(dim)),
+    "cube": lambda dim=3: Box(np.zeros(dim), np.ones(dim)),
+    "square": lambda dim=2: Box(np.zeros(dim), np.ones(dim)),
+    "ball": lambda dim=3: Ball(np.zeros(dim), 1.0),
+    "simplex": _simplex,
+    "torus": lambda dim=3, major=1.0, minor=0.35: Torus([0, 0, 0], float(major), float(minor)),
+    "annulus": _annulus,
+}
+
+
+def from_spec(spec: str):
+    """Build a named shape from ``name[:key=value,...]``, e.g. ``box:dim=4``."""
+    name, _, arguments = spec.partition(":")
+    name = name.strip().lower()
+    if name not in BUILTIN:
+        raise ShapeError(f"unknown shape {name!r}; built-in shapes are: {', '.join(BUILTIN)}")
+    keywords = {}
+    for item in filter(None, (part.strip() for part in arguments.split(","))):
+        key, equals, value = item.partition("=")
+        if not equals:
+            raise ShapeError(f"cannot read {item!r} in {spec!r}: write key=value, e.g. box:dim=4")
+        try:
+            number = float(value)
+        except ValueError:
+            raise ShapeError(f"{key} must be a number in {spec!r}, got {value!r}") from None
+        keywords[key.strip()] = int(number) if number.is_integer() and key.strip() == "dim" else number
+    if "dim" in keywords and keywords["dim"] < 1:
+        raise ShapeError(f"dim must be a positive integer in {spec!r}")
+    try:
+        return BUILTIN[name](**keywords)
+    except TypeError:
+        raise ShapeError(f"shape {name!r} does not take {', '.join(keywords)}") from None
+
+

@@ -1,0 +1,234 @@
+"""The ProtoSphere driver: exact cases, validity in 2D-6D, options, stopping, bad input."""
+
+import numpy as np
+import pytest
+
+import ndpack as nd
+from ndpack.protosphere import cooling_schedule, grid_counts
+
+
+def corner_radius(dim):
+    return 0.5 * (np.sqrt(dim) - 1) / (np.sqrt(dim) + 1)
+
+
+@pytest.mark.parametrize("dim", [2, 3, 4])
+def test_unit_cube_centre_then_corners(dim):
+    packing = nd.pack(nd.Box(np.zeros(dim), np.ones(dim)), n=1 + 2**dim, seed=0)
+    assert len(packing) == 1 + 2**dim
+    assert abs(packing.radii[0] - 0.5) / 0.5 < 1e-4
+    np.testing.assert_allclose(packing.centers[0], 0.5, atol=1e-4)
+    assert np.abs(packing.radii[1:] / corner_radius(dim) - 1).max() < 1e-4
+    # One sphere per corner: the nearest corner of each is at distance r * sqrt(d).
+    corners = np.round(packing.centers[1:])
+    assert len(np.unique(corners, axis=0)) == 2**dim
+    np.testing.assert_allclose(
+        np.linalg.norm(packing.centers[1:] - corners, axis=1), packing.radii[1:] * np.sqrt(dim), rtol=1e-4
+    )
+    assert packing.verify().ok
+
+
+@pytest.mark.parametrize("dim", [2, 3, 5])
+def test_first_sphere_in_a_ball_is_the_ball(dim):
+    center = np.linspace(-1, 1, dim)
+    packing = nd.pack(nd.Ball(center, 2.0), n=1, seed=1)
+    assert abs(packing.radii[0] - 2.0) / 2.0 < 1e-4
+    np.testing.assert_allclose(packing.centers[0], center, atol=1e-3)
+
+
+def shapes_in(dim):
+    """Every analytic N-D shape kind, bounded, plus CSG with thin parts and holes."""
+    zero, one = np.zeros(dim), np.ones(dim)
+    box = nd.Box(-one, one)
+    shapes = {
+        "ball": nd.Ball(zero, 1.0),
+        "box": box,
+        "rounded box": nd.RoundedBox(-one, one, 0.3),
+        "half-space & box": nd.HalfSpace(np.arange(1.0, dim + 1), 0.2) & box,
+        "slab & ball": nd.Slab(one, -0.3, 0.5) & nd.Ball(zero, 1.0),
+        "capsule": nd.Capsule(-0.5 * one, 0.5 * one, 0.3),
+        "cylinder": nd.Cylinder(zero, np.eye(dim)[0], 0.4),
+        "polytope": nd.ConvexPolytope(np.vstack([np.eye(dim), -np.ones((1, dim))]), np.r_[one, 0.5]),
+        "simplex": nd.Simplex(np.vstack([zero, np.eye(dim)])),
+        "ellipsoid": nd.Ellipsoid(zero, np.linspace(0.4, 1.0, dim)),
+        "box with a hole": box - nd.Ball(zero, 0.6),
+        "thin shell": nd.Ball(zero, 1.0).shell(0.12),
+        "rotated union": (nd.Box(-one, 0.2 * one) | nd.Ball(0.5 * one, 0.5)).rotate(nd.rotation(dim, 0.3)),
+        "smooth union": nd.Ball(-0.3 * np.eye(dim)[0], 0.5).smooth_union(nd.Ball(0.3 * np.eye(dim)[1], 0.4), 0.3),
+        "eroded, scaled, moved": box.offset(-0.2).scale_by(0.5).translate(one),
+    }
+    if dim == 2:
+        shapes["polygon with hole"] = nd.Polygon(
+            [[0, 0], [3, 0], [3, 1], [1, 1], [1, 3], [0, 3]], holes=[[[0.3, 0.3], [0.6, 0.3], [0.6, 0.6]]]
+        )
+    if dim == 3:
+        shapes["torus"] = nd.Torus(zero, 1.0, 0.25)
+    return shapes
+
+
+CASES = [(dim, name) for dim in range(2, 7) for name in shapes_in(dim)]
+
+
+@pytest.mark.parametrize("dim, name", CASES, ids=[f"{d}d-{n}" for d, n in CASES])
+def test_packings_of_every_shape_are_valid(dim, name):
+    shape = shapes_in(dim)[name]
+    packing = nd.pack(shape, n=25, grid=6 if dim > 3 else 16, seed=2)
+    report = nd.verify(packing, shape)
+    assert report.ok, report.summary()
+    # The first sphere in a ball is the ball: nothing else fits.
+    assert len(packing) == (1 if name == "ball" else 25)
+    # Strictly inside, by the safety margin.
+    assert report.worst_containment < 0
+
+
+@pytest.mark.parametrize(
+    "shape",
+    [nd.Box([0, 0], [1, 1]), nd.Box([0, 0, 0], [1, 1, 1]), nd.Box([0, 0], [1, 1]) - nd.Ball([0.3, 0.4], 0.2)],
+    ids=["square", "cube", "square with a hole"],
+)
+def test_greedy_order_is_largest_first_on_the_default_grid(shape):
+    # On coarse grids one cell can hide a second, larger local maximum; on the default grid
+    # these shapes come out in exact largest-first order.
+    radii = nd.pack(shape, n=150, seed=0).radii
+    assert np.all(np.diff(radii) <= 1e-9 * radii[:-1])
+
+
+def test_fill_statistics_grow_and_match_the_spheres():
+    packing = nd.pack(nd.Box([0, 0], [1, 1]), n=200, seed=0)
+    fill = packing.stats.fill
+    assert np.all(np.diff(fill) > 0)
+    assert np.all(np.diff(packing.stats.time) >= 0)
+    assert packing.stats.count[-1] == len(packing) == 200
+    assert fill[-1] == pytest.approx(packing.fill, rel=1e-12)
+    assert packing.fill == pytest.approx(np.pi * np.sum(packing.radii**2), rel=1e-12)
+    # An Apollonian packing of the square covers most of it with 200 circles.
+    assert 0.9 < packing.fill < 1
+
+
+def test_batch_packs_disjoint_spheres_with_similar_fill():
+    square = nd.Box([0, 0], [1, 1])
+    exact = nd.pack(square, n=300, seed=0)
+    batched = nd.pack(square, n=300, batch=16, seed=0)
+    assert batched.verify().ok
+    assert len(batched) == 300
+    assert batched.stats.count.size < exact.stats.count.size / 4
+    assert abs(batched.fill - exact.fill) / exact.fill < 0.01
+
+
+def test_same_seed_same_packing_and_other_seed_still_valid():
+    shape = nd.Ball([0, 0, 0], 1) - nd.Box([0, 0, 0], [2, 2, 2])
+    first = nd.pack(shape, n=40, seed=5)
+    second = nd.pack(shape, n=40, seed=5)
+    np.testing.assert_array_equal(first.centers, second.centers)
+    np.testing.assert_array_equal(first.radii, second.radii)
+    assert nd.pack(shape, n=40, seed=6).verify().ok
+
+
+def test_stop_conditions():
+    square = nd.Box([0, 0], [1, 1])
+    by_radius = nd.pack(square, n=10_000, min_radius=0.05, seed=0)
+    assert by_radius.stop_reason == "min_radius"
+    assert by_radius.radii.min() >= 0.05
+    by_fill = nd.pack(square, n=10_000, fill=0.8, seed=0)
+    assert by_fill.stop_reason == "fill"
+    assert by_fill.fill >= 0.8 and by_fill.stats.fill[-2] < 0.8
+    by_time = nd.pack(square, n=10**6, time_budget=0.5, seed=0)
+    assert by_time.stop_reason == "time"
+    assert 0 < len(by_time) < 10**6 and by_time.verify().ok
+
+
+def test_medial_axis_of_a_rectangle():
+    rectangle = nd.Box([0, 0], [2, 1])
+    packing = nd.pack(rectangle, n=1, grid=40, seed=0)
+    axis, radii = packing.medial_axis, packing.medial_radii
+    assert axis.shape[1] == 2 and radii.shape == (len(axis),)
+    np.testing.assert_allclose(radii, -rectangle.distance(axis), rtol=1e-12)
+    # Cells crossed by the middle segment y = 0.5, 0.5 < x < 1.5 hold converged points on it.
+    middle = axis[(axis[:, 0] > 0.6) & (axis[:, 0] < 1.4)]
+    on_axis = np.abs(middle[:, 1] - 0.5) < 1e-4
+    assert on_axis.sum() >= 0.8 * 40 * 0.8 / 2
+
+
+def test_interrupt_keeps_what_was_packed(monkeypatch):
+    from ndpack import protosphere
+
+    original = protosphere._ProtoSphere.reconverge
+    calls = {"count": 0}
+
+    def interrupted_on_the_fifth_round(self, ids):
+        calls["count"] += 1
+        if calls["count"] == 5:
+            raise KeyboardInterrupt  # what Ctrl-C raises
+        return original(self, ids)
+
+    monkeypatch.setattr(protosphere._ProtoSphere, "reconverge", interrupted_on_the_fifth_round)
+    packing = nd.pack(nd.Box([0, 0], [1, 1]), n=1000, seed=0)
+    assert packing.stop_reason == "interrupted"
+    assert len(packing) == 5 and packing.verify().ok
+    assert len(packing.stats.count) == 4
+
+
+def test_invalid_spheres_are_repaired_before_they_are_returned():
+    # The last line of defence against oracles that are not conservative: spheres that fail
+    # verification are shrunk (or dropped) and the user is warned.
+    from ndpack.protosphere import _ensure_valid
+
+    square = nd.Box([0, 0], [1, 1])
+    raw = nd.Packing(
+        centers=np.array([[0.5, 0.5], [0.9, 0.5], [0.05, 0.05]]),
+        radii=np.array([0.3, 0.2, 0.1]),  # the second overlaps the first and pokes out
+        rounds=np.arange(3),
+        volume=1.0,
+    )
+    with pytest.warns(RuntimeWarning, match="not conservative"):
+        fixed = _ensure_valid(raw, square, margin=1e-10)
+    assert nd.verify(fixed, square).ok
+    assert len(fixed) == 3
+    assert fixed.radii[0] == 0.3 and fixed.radii[1] < 0.1
+
+
+def test_cooling_schedule_and_grid():
+    steps = cooling_schedule(50)
+    assert steps[0] == 0.5 and steps[-1] == pytest.approx(2e-6)
+    assert np.all(np.diff(steps) < 0)
+    np.testing.assert_array_equal(grid_counts(np.array([[0, 0], [2, 1]]), 10), [10, 5])
+    assert abs(np.prod(grid_counts(np.array([[0, 0, 0], [1, 1, 1]]))) - 32768) < 100
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(n=0), "n .*positive integer"),
+        (dict(n=2.5), "n .*positive integer"),
+        (dict(iterations=0), "iterations must be a positive integer"),
+        (dict(batch=-1), "batch must be a positive integer"),
+        (dict(fill=1.5), r"fill .* must lie in \(0, 1\)"),
+        (dict(min_radius=-1), "min_radius must be a non-negative"),
+        (dict(time_budget=0), "time_budget must be a positive"),
+        (dict(grid=0), "grid must be a positive integer"),
+        (dict(grid=[4, 4, 4]), "grid must be a positive integer or 2"),
+        (dict(grid=10_000), "too large"),
+    ],
+)
+def test_impossible_parameters_are_refused(kwargs, message):
+    with pytest.raises(nd.ParameterError, match=message):
+        nd.pack(nd.Box([0, 0], [1, 1]), **kwargs)
+
+
+def test_bad_shapes_are_refused_with_clear_errors():
+    with pytest.raises(nd.ShapeError, match="no interior point"):
+        nd.pack(nd.Box([0, 0], [1, 1]) - nd.Ball([0.5, 0.5], 2.0), n=5)
+    with pytest.raises(nd.BoundsError, match="unbounded"):
+        nd.pack(nd.HalfSpace([1, 0], 0.0), n=5)
+    with pytest.raises(nd.BoundsError, match="do not enclose"):
+        nd.pack(nd.Function(lambda p: np.linalg.norm(p, axis=1) - 1, 2, [[-0.5, -0.5], [0.5, 0.5]]), n=5)
+    with pytest.raises(nd.DimensionError, match="different dimensions"):
+        nd.Box([0, 0], [1, 1]) | nd.Ball([0, 0, 0], 1)
+    with pytest.raises(TypeError, match="ndpack.Function"):
+        nd.pack(lambda p: p, n=5)
+    nan_plugin = nd.Function(
+        lambda p: np.where(p[:, 0] > 0.3, np.nan, np.linalg.norm(p, axis=1) - 1), 2, [[-1, -1], [1, 1]]
+    )
+    with pytest.raises(nd.OracleError, match="NaN"):
+        nd.pack(nan_plugin, n=5)
+    with pytest.raises(nd.BackendError, match="unknown backend"):
+        nd.pack(nd.Box([0, 0], [1, 1]), n=5, backend="abacus")
