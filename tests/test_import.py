@@ -1,0 +1,14 @@
+"""Importing ndpack stays light: no GPU framework, no plotting."""
+
+import subprocess
+import sys
+
+
+def test_import_pulls_in_no_heavy_framework():
+    code = (
+        "import sys, ndpack; "
+        "heavy = [m for m in ('warp', 'numba', 'numba.cuda', 'matplotlib', 'trimesh', 'manifold3d') if m in sys.modules]; "
+        "print(','.join(heavy))"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert result.stdout.strip() == ""
