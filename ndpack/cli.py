@@ -11,6 +11,7 @@ from .errors import NdpackError
 EXAMPLES = """examples:
   ndpack pack                          # the 3-D demo part, 1000 spheres
   ndpack pack box:dim=4 -n 500 -o box4.npz
+  ndpack pack ball --dim 6 -n 200
   ndpack pack annulus -n 2000 --batch 8 -o ring.csv
 built-in shapes: {shapes}
 """
@@ -28,6 +29,7 @@ def _parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     pack.add_argument("shape", nargs="?", default="demo", help="shape spec name[:key=value,...] (default: demo)")
+    pack.add_argument("--dim", type=int, help="dimension of the built-in shape (same as :dim=)")
     pack.add_argument("-n", "--count", type=int, default=1000, help="number of spheres (default 1000)")
     pack.add_argument("-o", "--output", help="write the packing to this .npz or .csv file")
     pack.add_argument("--min-radius", type=float, default=0.0, help="stop below this radius")
@@ -46,7 +48,10 @@ def _pack(args) -> int:
     from .builtin import from_spec
     from .protosphere import pack
 
-    shape = from_spec(args.shape)
+    spec = args.shape
+    if args.dim is not None:
+        spec += ("," if ":" in spec else ":") + f"dim={args.dim}"
+    shape = from_spec(spec)
     started = time.perf_counter()
     packing = pack(
         shape,
