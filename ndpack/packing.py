@@ -111,6 +111,12 @@ class Packing:
 
         return verify(self, shape, tol)
 
+    def plot(self, shape=None, ax=None, axes=(0, 1), at=None):
+        """Draw the packing (2-D) or a slice of it; see :func:`ndpack.plot.plot`."""
+        from .plot import plot
+
+        return plot(self, shape, ax=ax, axes=axes, at=at)
+
     def replace_spheres(self, centers, radii, rounds) -> Packing:
         """A copy with other spheres and everything else kept."""
         return replace(self, centers=centers, radii=radii, rounds=rounds)
