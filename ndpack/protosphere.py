@@ -86,7 +86,11 @@ def grid_counts(bounds: np.ndarray, grid=None) -> np.ndarray:
 
 def _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts):
     def positive_int(value, name):
-        if isinstance(value, bool) or not float(value).is_integer() or value < 1:
+        try:
+            whole = not isinstance(value, bool) and float(value).is_integer() and value >= 1
+        except (TypeError, ValueError):
+            whole = False
+        if not whole:
             raise ParameterError(f"{name} must be a positive integer, got {value!r}")
 
     positive_int(n, "n (the number of spheres)")
@@ -94,7 +98,7 @@ def _check_parameters(n, min_radius, fill, time_budget, iterations, batch, resta
     positive_int(batch, "batch")
     if not (isinstance(restarts, int) and restarts >= 0):
         raise ParameterError(f"restarts must be a non-negative integer, got {restarts!r}")
-    if not (np.isfinite(min_radius) and min_radius >= 0):
+    if not (isinstance(min_radius, (int, float, np.number)) and np.isfinite(min_radius) and min_radius >= 0):
         raise ParameterError(f"min_radius must be a non-negative number, got {min_radius!r}")
     if fill is not None and not (0 < fill < 1):
         raise ParameterError(f"fill (the target fill fraction) must lie in (0, 1), got {fill!r}")
@@ -310,6 +314,11 @@ def pack(
         eps_start=EPS_START, eps_end=EPS_END, safety_margin=SAFETY_MARGIN,
     )
     volume = shape.volume()
+    if not volume.value > 0:
+        raise ShapeError(
+            f"the volume of {shape!r} came out as {volume.value:g}: the shape is too thin for a "
+            "Monte Carlo estimate over its bounds; tighten the bounds or give the shape an exact volume"
+        )
     started = time.perf_counter()
     state = _ProtoSphere(shape, backend, counts, int(iterations), int(restarts), np.random.default_rng(seed))
     medial_axis, medial_radii = state.points.copy(), state.clearance.copy()

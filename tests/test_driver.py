@@ -199,6 +199,7 @@ def test_cooling_schedule_and_grid():
     [
         (dict(n=0), "n .*positive integer"),
         (dict(n=2.5), "n .*positive integer"),
+        (dict(n="many"), "n .*positive integer"),
         (dict(iterations=0), "iterations must be a positive integer"),
         (dict(batch=-1), "batch must be a positive integer"),
         (dict(fill=1.5), r"fill .* must lie in \(0, 1\)"),
