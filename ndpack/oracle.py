@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import BoundsError, DimensionError, OracleError, ShapeError
+from .errors import BoundsError, DimensionError, OracleError, ParameterError, ShapeError
 
 #: Points sampled for a Monte Carlo volume when none is given.
 DEFAULT_VOLUME_SAMPLES = 400_000
@@ -79,6 +79,9 @@ def as_points(points, dim: int) -> np.ndarray:
             f"expected points of shape (n, {dim}) for a {dim}-D shape, got an array of shape "
             f"{array.shape}; pass one row per point with {dim} coordinates"
         )
+    if not np.isfinite(array).all():
+        bad = int(np.flatnonzero(~np.isfinite(array).all(axis=1))[0])
+        raise ParameterError(f"points must be finite; row {bad} is {array[bad].tolist()}")
     return np.ascontiguousarray(array)
 
 
@@ -203,8 +206,10 @@ class Oracle:
         return float(max(np.abs(finite).max(), extent.max(), 1e-300))
 
     def _finite_difference_gradient(self, points: np.ndarray) -> np.ndarray:
-        # Central differences: 2 * dim evaluations, error O(h^2) on smooth parts.
-        step = 1e-6 * self.scale
+        # Central differences: 2 * dim evaluations, error O(h^2) on smooth parts. The step follows
+        # the shape's size, but stays above float64 resolution at its coordinates.
+        extent = float(np.ptp(self._bounds, axis=0).max()) if self.is_bounded else 1.0
+        step = max(1e-6 * extent, 1e-10 * self.scale)
         gradient = np.empty_like(points)
         for axis in range(self.dim):
             shifted = points.copy()

@@ -25,7 +25,7 @@ class RoundStats:
     Attributes
     ----------
     time : (r,) float64
-        Seconds since the start of the run (after prototype placement) at the end of the round.
+        Seconds since the start of the run (prototype placement included) at the end of the round.
     count : (r,) int64
         Spheres packed after the round.
     fill : (r,) float64

@@ -311,16 +311,17 @@ def pack(
         n=int(n), min_radius=float(min_radius), fill=fill, time_budget=time_budget,
         grid=counts.tolist(), iterations=int(iterations), batch=int(batch),
         restarts=int(restarts), seed=seed, backend=backend.name,
-        eps_start=EPS_START, eps_end=EPS_END, safety_margin=SAFETY_MARGIN,
+        eps_start=EPS_START, eps_end=EPS_END, cooling_power=COOLING_POWER,
+        polish_iterations=POLISH_ITERATIONS, polish_window=POLISH_WINDOW, safety_margin=SAFETY_MARGIN,
     )
+    started = time.perf_counter()
+    state = _ProtoSphere(shape, backend, counts, int(iterations), int(restarts), np.random.default_rng(seed))
     volume = shape.volume()
     if not volume.value > 0:
         raise ShapeError(
             f"the volume of {shape!r} came out as {volume.value:g}: the shape is too thin for a "
             "Monte Carlo estimate over its bounds; tighten the bounds or give the shape an exact volume"
         )
-    started = time.perf_counter()
-    state = _ProtoSphere(shape, backend, counts, int(iterations), int(restarts), np.random.default_rng(seed))
     medial_axis, medial_radii = state.points.copy(), state.clearance.copy()
     times, totals, fills = [], [], []
     covered = 0.0

@@ -190,3 +190,8 @@ def test_bad_csg_is_refused():
         nd.Union(A)
     with pytest.raises(TypeError, match="ndpack.Function"):
         A | (lambda p: p)
+
+
+def test_non_finite_points_are_refused():
+    with pytest.raises(nd.ParameterError, match="points must be finite; row 1"):
+        A.distance([[0.0, 0.0], [np.nan, 1.0]])
