@@ -44,6 +44,10 @@ EPS_START, EPS_END, COOLING_POWER = 0.5, 2e-6, 2.0
 POLISH_ITERATIONS, POLISH_EPS_START, POLISH_EPS_END, POLISH_POWER = 100, 0.05, 1e-7, 1.0
 #: Candidates within this fraction of the best clearance are polished.
 POLISH_WINDOW = 0.05
+#: A prototype swallowed by a new sphere may restart this factor of its radius from its centre.
+PUSH_OUT = 1.001
+#: Random starts per cell when dead prototypes are revived, before the driver gives up for room.
+REVIVE_TRIES, REVIVE_CHUNK = 32, 2048
 #: Radii are shrunk by this fraction of the shape's scale, so that float64 rounding in the
 #: distances (about 1e-16 of the scale) can never make touching spheres overlap or poke out.
 SAFETY_MARGIN = 1e-10
@@ -146,7 +150,7 @@ class _ProtoSphere:
         self.cell_upper = self.cell_lower + cell_size
         # Upper bound of any clearance inside the cell, used to find the spheres near it.
         self.reach = -centre_distance[keep] + half_diagonal
-        starts = self._candidate_starts(centres[keep])
+        starts = self._candidate_starts(centres[keep][None])
         no_spheres = np.zeros((len(self.cell_lower), 0), dtype=np.int64)
         self.points, self.clearance = self._best_start(starts, no_spheres)
         alive = self.clearance > 0
@@ -164,12 +168,13 @@ class _ProtoSphere:
         )
         self.polished = np.zeros(len(self.points), dtype=bool)
 
-    def _candidate_starts(self, first, ids=None):
-        """(restarts + 1, n, d): ``first`` and uniform random points of each prototype's cell."""
+    def _candidate_starts(self, first, ids=None, tries=None):
+        """(k + tries, n, d): the ``first`` (k, n, d) points and random points of each cell."""
         lower = self.cell_lower if ids is None else self.cell_lower[ids]
         upper = self.cell_upper if ids is None else self.cell_upper[ids]
-        random = lower + (upper - lower) * self.rng.random((self.restarts, *lower.shape))
-        return np.concatenate([first[None], random])
+        tries = self.restarts if tries is None else tries
+        random = lower + (upper - lower) * self.rng.random((tries, *lower.shape))
+        return np.concatenate([first, random])
 
     def _best_start(self, starts, neighbours):
         """Per prototype, the start with the largest clearance: ((n, d), (n,))."""
@@ -183,18 +188,41 @@ class _ProtoSphere:
         rows = np.arange(count)
         return starts[best, rows], clearance[best, rows]
 
-    def reconverge(self, ids):
-        """Restart the prototypes ``ids`` at their best start and let them converge again."""
+    def reconverge(self, ids, new_centers=None, new_radii=None, tries=None):
+        """Restart the prototypes ``ids`` at their best start and let them converge again.
+
+        The starts are the current point, that point pushed radially just outside the new sphere
+        it fell into (the new gaps lie along that sphere), and random points of the cell.
+        """
         centers, radii = self.centers[: self.count], self.radii[: self.count]
         lower, upper = self.cell_lower[ids], self.cell_upper[ids]
         neighbours = self.backend.near_spheres(lower, upper, self.reach[ids], centers, radii)
-        starts, _ = self._best_start(self._candidate_starts(self.points[ids], ids), neighbours)
+        first = [self.points[ids]]
+        if new_centers is not None:
+            offsets = first[0][:, None, :] - new_centers  # (n, k, d)
+            lengths = np.linalg.norm(offsets, axis=2)
+            nearest = np.argmin(lengths - new_radii, axis=1)
+            rows = np.arange(len(ids))
+            direction = offsets[rows, nearest] / np.maximum(lengths[rows, nearest], 1e-300)[:, None]
+            pushed = new_centers[nearest] + direction * (PUSH_OUT * new_radii[nearest])[:, None]
+            first.append(np.clip(pushed, lower, upper))
+        starts = self._candidate_starts(np.stack(first), ids, tries)
+        starts, _ = self._best_start(starts, neighbours)
         points, clearance = self.backend.converge(
             self.shape, starts, lower, upper, centers, radii, neighbours, self.steps
         )
         self.points[ids] = points
         self.clearance[ids] = clearance
         self.polished[ids] = False
+
+    def revive(self):
+        """Restart the dead prototypes (no free start found) with fresh random points; how many live."""
+        dead = np.flatnonzero(self.clearance <= self.margin)
+        if len(dead) == 0 or self.count == 0:
+            return 0
+        for start in range(0, len(dead), REVIVE_CHUNK):  # bounded memory for any grid
+            self.reconverge(dead[start : start + REVIVE_CHUNK], tries=REVIVE_TRIES)
+        return int(np.count_nonzero(self.clearance[dead] > self.margin))
 
     def polish_leaders(self, batch):
         """Polish every unpolished prototype within ``POLISH_WINDOW`` of the ``batch``-th best.
@@ -341,6 +369,9 @@ def pack(
                 break
             state.polish_leaders(int(batch))
             centers, radii = state.choose(int(batch), min_radius, int(n) - state.count)
+            if len(radii) == 0 and state.revive():
+                state.polish_leaders(int(batch))
+                centers, radii = state.choose(int(batch), min_radius, int(n) - state.count)
             if len(radii) == 0:
                 stop_reason = "min_radius" if min_radius > 0 else "no_room"
                 break
@@ -348,7 +379,7 @@ def pack(
             covered += float(ball_volume(state.dim, radii).sum())
             touched = np.flatnonzero(backend.touched(state.points, state.clearance, centers, radii))
             if len(touched):
-                state.reconverge(touched)
+                state.reconverge(touched, centers, radii)
             times.append(time.perf_counter() - started)
             totals.append(state.count)
             fills.append(covered / volume.value)

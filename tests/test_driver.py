@@ -154,11 +154,11 @@ def test_interrupt_keeps_what_was_packed(monkeypatch):
     original = protosphere._ProtoSphere.reconverge
     calls = {"count": 0}
 
-    def interrupted_on_the_fifth_round(self, ids):
+    def interrupted_on_the_fifth_round(self, *args, **kwargs):
         calls["count"] += 1
         if calls["count"] == 5:
             raise KeyboardInterrupt  # what Ctrl-C raises
-        return original(self, ids)
+        return original(self, *args, **kwargs)
 
     monkeypatch.setattr(protosphere._ProtoSphere, "reconverge", interrupted_on_the_fifth_round)
     packing = nd.pack(nd.Box([0, 0], [1, 1]), n=1000, seed=0)
@@ -184,6 +184,14 @@ def test_invalid_spheres_are_repaired_before_they_are_returned():
     assert nd.verify(fixed, square).ok
     assert len(fixed) == 3
     assert fixed.radii[0] == 0.3 and fixed.radii[1] < 0.1
+
+
+def test_dead_prototypes_are_revived_before_giving_up_for_room():
+    # On a coarse grid every prototype's random restarts soon land inside spheres; the revival
+    # keeps the run going while free space is left, instead of stopping early for "no room".
+    packing = nd.pack(nd.Box([0, 0], [1, 1]), n=600, grid=12, restarts=1, seed=0)
+    assert len(packing) == 600 and packing.stop_reason == "count"
+    assert packing.verify().ok
 
 
 def test_cooling_schedule_and_grid():

@@ -88,14 +88,21 @@ class NumpyBackend(Backend):
         count, dim = box_lower.shape
         if len(centers) == 0:
             return np.zeros((count, 0), dtype=np.int64)
+        middles = (box_lower + box_upper) / 2
+        half_diagonals = np.linalg.norm(box_upper - box_lower, axis=1) / 2
         hits = []
         for part in _chunks(count, len(centers) * dim):
-            # Distance from each sphere centre to each box, then keep the reachable spheres.
+            # Distance from each sphere to each box, and to the box's centre.
             below = box_lower[part, None, :] - centers
             above = centers - box_upper[part, None, :]
             outside = np.maximum(np.maximum(below, above), 0.0)
-            gap = np.sqrt(np.einsum("nmd,nmd->nm", outside, outside)) - radii
-            hits.append(gap <= reach[part, None])
+            box_gap = np.sqrt(np.einsum("nmd,nmd->nm", outside, outside)) - radii
+            offsets = middles[part, None, :] - centers
+            centre_gap = np.sqrt(np.einsum("nmd,nmd->nm", offsets, offsets)) - radii
+            # No point of the box is farther than half a diagonal from the centre, so its
+            # clearance is below the centre's gap to any sphere plus that: a tighter reach.
+            bound = np.minimum(reach[part], centre_gap.min(axis=1) + half_diagonals[part])
+            hits.append(box_gap <= bound[:, None])
         hits = np.concatenate(hits)
         width = int(hits.sum(axis=1).max())
         neighbours = np.full((count, width), len(centers), dtype=np.int64)
