@@ -188,15 +188,20 @@ class _ProtoSphere:
         rows = np.arange(count)
         return starts[best, rows], clearance[best, rows]
 
+    def _near_spheres(self, ids):
+        """The inserted spheres and, per prototype ``ids``, those that can be its nearest."""
+        centers, radii = self.centers[: self.count], self.radii[: self.count]
+        lower, upper = self.cell_lower[ids], self.cell_upper[ids]
+        neighbours = self.backend.near_spheres(lower, upper, self.reach[ids], centers, radii)
+        return centers, radii, lower, upper, neighbours
+
     def reconverge(self, ids, new_centers=None, new_radii=None, tries=None):
         """Restart the prototypes ``ids`` at their best start and let them converge again.
 
         The starts are the current point, that point pushed radially just outside the new sphere
         it fell into (the new gaps lie along that sphere), and random points of the cell.
         """
-        centers, radii = self.centers[: self.count], self.radii[: self.count]
-        lower, upper = self.cell_lower[ids], self.cell_upper[ids]
-        neighbours = self.backend.near_spheres(lower, upper, self.reach[ids], centers, radii)
+        centers, radii, lower, upper, neighbours = self._near_spheres(ids)
         first = [self.points[ids]]
         if new_centers is not None:
             offsets = first[0][:, None, :] - new_centers  # (n, k, d)
@@ -236,9 +241,7 @@ class _ProtoSphere:
             ids = np.flatnonzero(~self.polished & (self.clearance >= (1 - POLISH_WINDOW) * kth_best))
             if len(ids) == 0 or kth_best <= 0:
                 return
-            centers, radii = self.centers[: self.count], self.radii[: self.count]
-            lower, upper = self.cell_lower[ids], self.cell_upper[ids]
-            neighbours = self.backend.near_spheres(lower, upper, self.reach[ids], centers, radii)
+            centers, radii, lower, upper, neighbours = self._near_spheres(ids)
             points, clearance = self.backend.converge(
                 self.shape, self.points[ids], lower, upper, centers, radii, neighbours, self.polish_steps
             )

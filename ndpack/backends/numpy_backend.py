@@ -69,7 +69,8 @@ class NumpyBackend(Backend):
         points = points.copy()
         best_points = points.copy()
         best = np.full(len(points), -np.inf)
-        for eps in steps:
+        # One evaluation more than there are steps: the point after the last step counts too.
+        for eps in [*steps, 0.0]:
             clearance, direction = self._free_space(shape, points, neighbour_centers, neighbour_radii)
             # The zig-zag around a Voronoi node is not monotone: keep the best point seen.
             better = clearance > best
@@ -78,10 +79,6 @@ class NumpyBackend(Backend):
             # |clearance|: a prototype inside an obstacle also moves towards free space.
             points += (eps * np.abs(clearance))[:, None] * direction
             np.clip(points, cell_lower, cell_upper, out=points)
-        clearance, _ = self._free_space(shape, points, neighbour_centers, neighbour_radii)
-        better = clearance > best
-        best[better] = clearance[better]
-        best_points[better] = points[better]
         return best_points, best
 
     def near_spheres(self, box_lower, box_upper, reach, centers, radii):
