@@ -32,3 +32,7 @@ class ParameterError(NdpackError, ValueError):
 
 class BackendError(NdpackError, RuntimeError):
     """A backend is unknown, not installed, or cannot run here."""
+
+
+class KernelError(NdpackError, TypeError):
+    """A shape or plug-in cannot be compiled to a scalar kernel for a compiled backend."""

@@ -15,6 +15,7 @@ from .base import Backend
 #: name -> (module, class, pip install hint)
 _KNOWN = {
     "numpy": ("ndpack.backends.numpy_backend", "NumpyBackend", None),
+    "numba": ("ndpack.backends.numba_backend", "NumbaBackend", "pip install numba"),
 }
 
 _instances: dict[str, Backend] = {}

@@ -88,3 +88,31 @@ class Backend:
 
     def __repr__(self) -> str:
         return f"<ndpack backend {self.name!r}>"
+
+
+def compiled_program(shape):
+    """The kernel program of ``shape`` and its (k,) float64 parameters, built once per shape.
+
+    Raises
+    ------
+    BackendError
+        If the shape has no scalar kernel (a NumPy-only plug-in), saying what to do.
+    """
+    from ..errors import KernelError
+    from ..kernels import build
+
+    cached = shape.__dict__.get("_ndpack_program")
+    if cached is None:
+        try:
+            program = build(shape)
+        except KernelError as error:
+            from ..errors import BackendError
+
+            raise BackendError(
+                f"{shape!r} cannot run on a compiled backend: {error}. Use backend='numpy', or "
+                "write the plug-in as a scalar function (ndpack.ScalarFunction) so it compiles "
+                "for every backend"
+            ) from None
+        cached = (program, program.param_array())
+        shape.__dict__["_ndpack_program"] = cached
+    return cached

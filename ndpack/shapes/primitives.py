@@ -37,6 +37,7 @@ from scipy.optimize import linprog
 from scipy.spatial import ConvexHull, HalfspaceIntersection, QhullError
 
 from ..errors import DimensionError, ShapeError
+from ..kernels import library
 from ..oracle import Oracle, as_vector, ball_volume, unit_rows
 
 __all__ = [  # noqa: RUF022 - in the order of the module docstring
@@ -186,6 +187,10 @@ class Ball(_Analytic):
     def _exact_volume(self):
         return float(ball_volume(self.dim, self.radius))
 
+    def _kernel(self, program):
+        offset = program.add_params([*self.center, self.radius])
+        return program.define(f"def _(p, prm):\n    return {program.use(library.ball)}(p, prm, {offset})\n")
+
     def __repr__(self):
         return f"Ball(center={_floats(self.center)}, radius={self.radius!r})"
 
@@ -245,6 +250,10 @@ class Box(_Analytic):
 
     def _exact_volume(self):
         return float(np.prod(self.upper - self.lower))
+
+    def _kernel(self, program):
+        offset = program.add_params([*self._center, *self._half])
+        return program.define(f"def _(p, prm):\n    return {program.use(library.box)}(p, prm, {offset})\n")
 
     def __repr__(self):
         return f"Box(lower={_floats(self.lower)}, upper={_floats(self.upper)})"

@@ -1,0 +1,161 @@
+"""The Numba CPU backend: the reference's loops compiled to machine code, parallel over prototypes.
+
+Each shape compiles once per structure and dimension (see :mod:`ndpack.kernels`); the per-point
+work is shared with the CUDA backend (:mod:`ndpack.backends.numba_kernels`). float64 throughout.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .base import Backend, compiled_program
+
+#: The per-point functions, as text (see numba_kernels.py).
+KERNELS = Path(__file__).with_name("numba_kernels.py").read_text()
+
+#: Entry points: a parallel loop over prototypes (or boxes) calling the per-point functions.
+ENTRIES = '''
+def clearance_all(points, prm, centers, radii, nbr, out):
+    for i in prange(points.shape[0]):
+        clearance_one(i, points, prm, centers, radii, nbr, out)
+
+
+def converge_all(points, lower, upper, prm, centers, radii, nbr, steps, out_points, out_clearance):
+    for i in prange(points.shape[0]):
+        converge_one(i, points, lower, upper, prm, centers, radii, nbr, steps, out_points, out_clearance)
+
+
+def near_count(lower, upper, reach, centers, radii, counts, out):
+    for b in prange(lower.shape[0]):
+        counts[b] = near_one(b, lower, upper, reach, centers, radii, out, 0)
+
+
+def near_fill(lower, upper, reach, centers, radii, out):
+    for b in prange(lower.shape[0]):
+        near_one(b, lower, upper, reach, centers, radii, out, out.shape[1])
+
+
+def touched_all(points, clearance, centers, radii, out):
+    for i in prange(points.shape[0]):
+        touched_one(i, points, clearance, centers, radii, out)
+'''
+
+#: Central-difference step, as a fraction of the shape's scale: float64 rounding in the
+#: difference is about 1e-16 / 1e-6 of the gradient, truncation about 1e-12 for unit curvature.
+FD_STEP = 1e-6
+ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all")
+
+
+def _jit(namespace, names):
+    import numba
+
+    for name in names:
+        parallel = name in ENTRY_NAMES
+        namespace[name] = numba.njit(parallel=parallel, cache=False)(namespace[name])
+    namespace["prange"] = numba.prange
+
+
+class NumbaBackend(Backend):
+    """Numba on the CPU, float64, parallel over prototypes with ``prange``.
+
+    Parameters
+    ----------
+    threads : int, optional
+        Numba threads to use; default all (``NUMBA_NUM_THREADS``).
+    """
+
+    name = "numba"
+
+    def __init__(self, threads: int | None = None):
+        import numba
+
+        self.numba = numba
+        self.threads = threads
+        self._namespaces = {}  # id(program) -> (program, namespace)
+
+    def _kernels(self, shape):
+        from ..kernels.compile import numba_namespace
+
+        program, params = compiled_program(shape)
+        if id(program) in self._namespaces:
+            return self._namespaces[id(program)][1], params
+
+        def jit(namespace, names):
+            namespace["prange"] = self.numba.prange
+            _jit(namespace, names)
+
+        namespace = numba_namespace(
+            program, "cpu", KERNELS + ENTRIES, {"H": FD_STEP * shape.scale}, jit
+        )
+        self._namespaces[id(program)] = (program, namespace)
+        return namespace, params
+
+    def _run(self, function, *args):
+        if self.threads is None:
+            return function(*args)
+        previous = self.numba.get_num_threads()
+        self.numba.set_num_threads(self.threads)
+        try:
+            return function(*args)
+        finally:
+            self.numba.set_num_threads(previous)
+
+    def clearance(self, shape, points, centers, radii, neighbours):
+        namespace, params = self._kernels(shape)
+        out = np.empty(len(points))
+        self._run(namespace["clearance_all"], _f64(points), params, _f64(centers), _f64(radii),
+                  _i64(neighbours), out)
+        return out
+
+    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
+        namespace, params = self._kernels(shape)
+        out_points = np.empty_like(points)
+        out_clearance = np.empty(len(points))
+        self._run(namespace["converge_all"], _f64(points), _f64(cell_lower), _f64(cell_upper), params,
+                  _f64(centers), _f64(radii), _i64(neighbours), _f64(steps), out_points, out_clearance)
+        return out_points, out_clearance
+
+    def near_spheres(self, box_lower, box_upper, reach, centers, radii):
+        namespace = _geometry(len(box_lower[0]) if len(box_lower) else 1)
+        count = len(box_lower)
+        if len(centers) == 0 or count == 0:
+            return np.zeros((count, 0), dtype=np.int64)
+        counts = np.empty(count, dtype=np.int64)
+        args = (_f64(box_lower), _f64(box_upper), _f64(reach), _f64(centers), _f64(radii))
+        self._run(namespace["near_count"], *args, counts, np.empty((count, 0), dtype=np.int64))
+        out = np.full((count, int(counts.max())), len(centers), dtype=np.int64)
+        self._run(namespace["near_fill"], *args, out)
+        return out
+
+    def touched(self, points, clearance, new_centers, new_radii):
+        namespace = _geometry(points.shape[1])
+        out = np.empty(len(points), dtype=np.bool_)
+        self._run(namespace["touched_all"], _f64(points), _f64(clearance), _f64(new_centers),
+                  _f64(new_radii), out)
+        return out
+
+
+_geometry_cache = {}
+
+
+def _geometry(dim):
+    """The shape-free kernels (near_spheres, touched) for dimension ``dim``."""
+    if dim in _geometry_cache:
+        return _geometry_cache[dim]
+    from ..kernels.compile import numba_namespace
+    from ..kernels.program import Program
+
+    program = Program(dim)
+    program.define("def _(p, prm):\n    return 0.0\n")
+    _geometry_cache[dim] = numba_namespace(program, "cpu", KERNELS + ENTRIES, {"H": 1.0}, _jit)
+    return _geometry_cache[dim]
+
+
+def _f64(array):
+    return np.ascontiguousarray(array, dtype=np.float64)
+
+
+def _i64(array):
+    return np.ascontiguousarray(array, dtype=np.int64)

@@ -1,0 +1,502 @@
+"""The scalar kernel language: one Python source, printed for Numba (CPU and CUDA) and Warp.
+
+Every shape's distance is written once as plain Python functions in a small subset, which this
+module checks, types, and prints in the dialect each compiler accepts. The same subset is what
+users write scalar plug-ins in (:class:`ndpack.ScalarFunction`).
+
+The subset
+----------
+- A function ``def f(p, prm, ...)``: ``p`` is a point (``p[i]`` for ``0 <= i < D``), ``prm`` a
+  flat array of float parameters; more arguments may be annotated ``int`` or ``float``. It
+  returns one float.
+- ``D``, the dimension, is a compile-time constant.
+- Statements: ``x = e``, ``x += e`` (and ``-= *= /=``), ``q[i] = e`` on a local point,
+  ``for i in range(...)``, ``while``, ``if``/``elif``/``else``, ``break``, ``continue``,
+  ``return e``, ``pass``.
+- Expressions: int, float and bool constants; ``+ - * / // % **``; comparisons; ``and or
+  not``; ``a if c else b``; ``math.<f>(...)`` for the functions in :data:`MATH_FUNCTIONS`,
+  ``math.pi`` and ``math.e``; ``min``, ``max``, ``abs``, ``int``, ``float``; ``point()``, a
+  new local point of length ``D``; calls of other kernel functions.
+- Not allowed: other globals, lists, tuples, strings, attributes, ``inf`` (use a large number).
+
+Dialects
+--------
+``"numba"``: for ``numba.njit``; ``point()`` is ``np.empty(D)``.
+``"cuda"``: for ``numba.cuda.jit(device=True)``; ``point()`` is a local array.
+``"warp"``: ``@wp.func`` with typed arguments; float constants and int operands in float
+arithmetic are cast explicitly (Warp does not promote), ``math.f`` becomes ``wp.f``.
+"""
+
+from __future__ import annotations
+
+import ast
+import copy
+import inspect
+import math
+import textwrap
+
+from ..errors import KernelError
+
+#: ``math`` functions the kernel language accepts (Warp has each as ``wp.<name>``).
+MATH_FUNCTIONS = frozenset(
+    "sqrt sin cos tan asin acos atan atan2 exp log log2 log10 sinh cosh tanh floor ceil fabs pow".split()
+)
+#: ``math`` constants, inlined as numbers.
+MATH_CONSTANTS = {"pi": math.pi, "e": math.e}
+BUILTINS = frozenset({"min", "max", "abs", "int", "float", "range", "point"})
+
+INT, FLOAT, BOOL, POINT, ARRAY = "int", "float", "bool", "point", "array"
+
+_BINARY = (ast.Add, ast.Sub, ast.Mult, ast.Div, ast.FloorDiv, ast.Mod, ast.Pow)
+_UNARY = (ast.USub, ast.UAdd, ast.Not)
+_COMPARE = (ast.Lt, ast.LtE, ast.Gt, ast.GtE, ast.Eq, ast.NotEq)
+
+
+def parse_function(fn) -> ast.FunctionDef:
+    """The AST of a Python function (or of source text holding one function)."""
+    if isinstance(fn, str):
+        source = fn
+        where = "kernel source"
+    else:
+        try:
+            source = inspect.getsource(fn)
+        except (OSError, TypeError) as error:
+            raise KernelError(
+                f"cannot read the source of {getattr(fn, '__name__', fn)!r} ({error}); define scalar "
+                "kernels with def in a file or notebook cell, not with lambda or exec"
+            ) from None
+        where = f"{fn.__qualname__} ({inspect.getsourcefile(fn)})"
+    tree = ast.parse(textwrap.dedent(source))
+    functions = [node for node in tree.body if isinstance(node, ast.FunctionDef)]
+    if len(functions) != 1:
+        raise KernelError(f"{where}: expected exactly one function definition")
+    function = functions[0]
+    function.decorator_list = []
+    function.returns = None
+    return function
+
+
+class Signature:
+    """Argument types of a kernel function: the point, the parameter array, then int/float extras."""
+
+    def __init__(self, function: ast.FunctionDef):
+        args = function.args
+        if args.vararg or args.kwarg or args.kwonlyargs or args.defaults or args.posonlyargs:
+            raise KernelError(
+                f"kernel {function.name!r}: only plain positional arguments are allowed"
+            )
+        names = [a.arg for a in args.args]
+        if len(names) < 2:
+            raise KernelError(
+                f"kernel {function.name!r} must take at least (p, prm): the point and the parameters"
+            )
+        self.names = names
+        self.types = [POINT, ARRAY]
+        for a in args.args[2:]:
+            kind = getattr(a.annotation, "id", None)
+            if kind not in (INT, FLOAT):
+                raise KernelError(
+                    f"kernel {function.name!r}: argument {a.arg!r} needs an annotation, int or float"
+                )
+            self.types.append(kind)
+
+
+def _fail(function: ast.FunctionDef, node: ast.AST, message: str):
+    line = getattr(node, "lineno", function.lineno)
+    raise KernelError(
+        f"kernel {function.name!r}, line {line - function.lineno + 1}: {message} "
+        "(see ndpack.kernels.language for the supported subset)"
+    )
+
+
+class _Checker(ast.NodeVisitor):
+    """Rejects everything outside the subset and infers the type of every local name."""
+
+    def __init__(self, function: ast.FunctionDef, callees: set[str]):
+        self.function = function
+        self.callees = callees
+        self.signature = Signature(function)
+        self.types = dict(zip(self.signature.names, self.signature.types))
+        self.changed = False
+
+    def fail(self, node, message):
+        _fail(self.function, node, message)
+
+    def run(self) -> dict[str, str]:
+        body = self.function.body
+        if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant):
+            body = body[1:]  # docstring
+        # Types only widen (int -> float), so a few passes reach the fixed point.
+        for _ in range(8):
+            self.changed = False
+            for statement in body:
+                self.statement(statement)
+            if not self.changed:
+                return self.types
+        return self.types
+
+    # ---------------------------------------------------------------- statements
+    def assign_name(self, node, name, kind):
+        if name == "D" or name in self.signature.names[:2]:
+            self.fail(node, f"cannot assign to {name!r}")
+        old = self.types.get(name)
+        if old in (POINT, ARRAY) or kind in (POINT, ARRAY):
+            if old is not None and old != kind:
+                self.fail(node, f"{name!r} cannot be both a point and a number")
+            new = kind
+        elif old is None:
+            new = kind
+        else:
+            new = FLOAT if FLOAT in (old, kind) else old
+        if new != old:
+            self.types[name] = new
+            self.changed = True
+
+    def statement(self, node):
+        if isinstance(node, ast.Assign):
+            if len(node.targets) != 1:
+                self.fail(node, "one assignment target at a time")
+            self.assign(node, node.targets[0], self.expr(node.value))
+        elif isinstance(node, ast.AugAssign):
+            if not isinstance(node.op, _BINARY):
+                self.fail(node, f"operator {type(node.op).__name__} is not supported")
+            kind = self.expr(node.value)
+            if isinstance(node.target, ast.Name):
+                current = self.types.get(node.target.id)
+                if current is None:
+                    self.fail(node, f"{node.target.id!r} is used before it is assigned")
+                if isinstance(node.op, ast.Div):
+                    kind = FLOAT
+                self.assign(node, node.target, kind)
+            else:
+                self.assign(node, node.target, kind)
+        elif isinstance(node, ast.For):
+            if node.orelse:
+                self.fail(node, "for ... else is not supported")
+            if not isinstance(node.target, ast.Name):
+                self.fail(node, "the loop variable must be a single name")
+            call = node.iter
+            if not (isinstance(call, ast.Call) and getattr(call.func, "id", None) == "range"
+                    and 1 <= len(call.args) <= 3 and not call.keywords):
+                self.fail(node, "loops must run over range(...)")
+            for arg in call.args:
+                if self.expr(arg) != INT:
+                    self.fail(arg, "range() takes ints; wrap the value in int()")
+            self.assign_name(node, node.target.id, INT)
+            for statement in node.body:
+                self.statement(statement)
+        elif isinstance(node, ast.While):
+            if node.orelse:
+                self.fail(node, "while ... else is not supported")
+            self.expr(node.test)
+            for statement in node.body:
+                self.statement(statement)
+        elif isinstance(node, ast.If):
+            self.expr(node.test)
+            for statement in node.body + node.orelse:
+                self.statement(statement)
+        elif isinstance(node, ast.Return):
+            if node.value is None:
+                self.fail(node, "return a float")
+            if self.expr(node.value) not in (INT, FLOAT):
+                self.fail(node, "return a number")
+        elif isinstance(node, (ast.Break, ast.Continue, ast.Pass)):
+            pass
+        elif isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant) and isinstance(node.value.value, str):
+            pass  # a string used as a comment
+        else:
+            self.fail(node, f"statement {type(node).__name__} is not supported")
+
+    def assign(self, node, target, kind):
+        if isinstance(target, ast.Name):
+            self.assign_name(node, target.id, kind)
+        elif isinstance(target, ast.Subscript) and isinstance(target.value, ast.Name):
+            if self.types.get(target.value.id) != POINT or target.value.id == self.signature.names[0]:
+                self.fail(node, "only local points made with point() can be assigned into")
+            if self.expr(target.slice) != INT:
+                self.fail(node, "indices must be ints")
+            if kind not in (INT, FLOAT):
+                self.fail(node, "a point's coordinates are numbers")
+        else:
+            self.fail(node, "assign to a name or to q[i] of a local point")
+
+    # ---------------------------------------------------------------- expressions
+    def expr(self, node) -> str:
+        if isinstance(node, ast.Constant):
+            value = node.value
+            if isinstance(value, bool):
+                return BOOL
+            if isinstance(value, int):
+                return INT
+            if isinstance(value, float):
+                if not math.isfinite(value):
+                    self.fail(node, "constants must be finite; use a large number for infinity")
+                return FLOAT
+            self.fail(node, f"constant {value!r} is not a number")
+        if isinstance(node, ast.Name):
+            if node.id == "D":
+                return INT
+            if node.id not in self.types:
+                if node.id in self.callees or node.id == "math":
+                    self.fail(node, f"{node.id!r} can only be called")
+                self.fail(
+                    node, f"unknown name {node.id!r}: kernels see only their arguments, locals and D; "
+                    "pass other values through the parameters"
+                )
+            return self.types[node.id]
+        if isinstance(node, ast.Subscript):
+            base = node.value
+            if not (isinstance(base, ast.Name) and self.types.get(base.id) in (POINT, ARRAY)):
+                self.fail(node, "only the point, the parameters and local points can be indexed")
+            if isinstance(node.slice, ast.Slice) or self.expr(node.slice) != INT:
+                self.fail(node, "indices must be single ints (no slices); wrap floats in int()")
+            return FLOAT
+        if isinstance(node, ast.BinOp):
+            if not isinstance(node.op, _BINARY):
+                self.fail(node, f"operator {type(node.op).__name__} is not supported")
+            kinds = {self.expr(node.left), self.expr(node.right)}
+            if not kinds <= {INT, FLOAT}:
+                self.fail(node, "arithmetic needs numbers")
+            if isinstance(node.op, ast.Div) or FLOAT in kinds:
+                return FLOAT
+            return INT
+        if isinstance(node, ast.UnaryOp):
+            if not isinstance(node.op, _UNARY):
+                self.fail(node, f"operator {type(node.op).__name__} is not supported")
+            kind = self.expr(node.operand)
+            return BOOL if isinstance(node.op, ast.Not) else kind
+        if isinstance(node, ast.BoolOp):
+            for value in node.values:
+                self.expr(value)
+            return BOOL
+        if isinstance(node, ast.Compare):
+            if not all(isinstance(op, _COMPARE) for op in node.ops):
+                self.fail(node, "only < <= > >= == != comparisons are supported")
+            for value in [node.left, *node.comparators]:
+                if self.expr(value) not in (INT, FLOAT):
+                    self.fail(node, "comparisons need numbers")
+            return BOOL
+        if isinstance(node, ast.IfExp):
+            self.expr(node.test)
+            kinds = {self.expr(node.body), self.expr(node.orelse)}
+            if not kinds <= {INT, FLOAT}:
+                self.fail(node, "both sides of a conditional expression must be numbers")
+            return FLOAT if FLOAT in kinds else INT
+        if isinstance(node, ast.Attribute):
+            if isinstance(node.value, ast.Name) and node.value.id == "math" and node.attr in MATH_CONSTANTS:
+                return FLOAT
+            self.fail(node, "attributes are not supported (except math.pi and math.e)")
+        if isinstance(node, ast.Call):
+            return self.call(node)
+        self.fail(node, f"{type(node).__name__} is not supported")
+
+    def call(self, node) -> str:
+        if node.keywords:
+            self.fail(node, "keyword arguments are not supported")
+        kinds = [self.expr(arg) for arg in node.args]
+        func = node.func
+        if isinstance(func, ast.Attribute):
+            if not (isinstance(func.value, ast.Name) and func.value.id == "math" and func.attr in MATH_FUNCTIONS):
+                self.fail(node, f"only math.<f> for f in {sorted(MATH_FUNCTIONS)} can be called")
+            return FLOAT
+        if not isinstance(func, ast.Name):
+            self.fail(node, "call functions by name")
+        name = func.id
+        if name in ("min", "max", "abs"):
+            if not kinds or (name == "abs") != (len(kinds) == 1) or not set(kinds) <= {INT, FLOAT}:
+                self.fail(node, f"{name}() takes {'one number' if name == 'abs' else 'two or more numbers'}")
+            return FLOAT if FLOAT in kinds else INT
+        if name in ("int", "float"):
+            if len(kinds) != 1 or kinds[0] not in (INT, FLOAT):
+                self.fail(node, f"{name}() takes one number")
+            return INT if name == "int" else FLOAT
+        if name == "point":
+            if kinds:
+                self.fail(node, "point() takes no arguments (its length is D)")
+            return POINT
+        if name == "range":
+            self.fail(node, "range() can only appear in a for loop")
+        if name in self.callees:
+            return FLOAT
+        self.fail(node, f"unknown function {name!r}")
+
+
+class Kernel:
+    """A checked kernel function: its AST, signature and the type of every name it uses.
+
+    Parameters
+    ----------
+    fn : function or str
+        A Python function in the subset, or the source text of one.
+    callees : iterable of str
+        Names of other kernel functions it may call.
+    """
+
+    def __init__(self, fn, callees=()):
+        self.function = parse_function(fn)
+        self.name = self.function.name
+        self.signature = Signature(self.function)
+        self.types = _Checker(self.function, set(callees)).run()
+
+    def render(self, dialect: str, dim: int, float_name: str = "float64") -> str:
+        """Source text in ``dialect`` ("numba", "cuda" or "warp") for dimension ``dim``."""
+        return render(self, dialect, dim, float_name)
+
+
+# -------------------------------------------------------------------- printers
+class _Printer(ast.NodeTransformer):
+    """Rewrites a checked kernel for one dialect; ``ast.unparse`` then prints it."""
+
+    def __init__(self, dialect: str, dim: int, types: dict[str, str], float_name: str):
+        self.dialect = dialect
+        self.dim = dim
+        self.types = types
+        self.float_name = float_name  # "float64" or "float32"
+
+    # Type of an already-checked expression, recomputed on the original node.
+    def kind(self, node) -> str:
+        if isinstance(node, ast.Constant):
+            return BOOL if isinstance(node.value, bool) else INT if isinstance(node.value, int) else FLOAT
+        if isinstance(node, ast.Name):
+            return INT if node.id == "D" else self.types.get(node.id, FLOAT)
+        if isinstance(node, ast.BinOp):
+            kinds = {self.kind(node.left), self.kind(node.right)}
+            return FLOAT if isinstance(node.op, ast.Div) or FLOAT in kinds else INT
+        if isinstance(node, ast.UnaryOp):
+            return BOOL if isinstance(node.op, ast.Not) else self.kind(node.operand)
+        if isinstance(node, (ast.BoolOp, ast.Compare)):
+            return BOOL
+        if isinstance(node, ast.IfExp):
+            return FLOAT if FLOAT in {self.kind(node.body), self.kind(node.orelse)} else INT
+        if isinstance(node, ast.Call):
+            name = getattr(node.func, "id", None)
+            if name in ("min", "max", "abs"):
+                return FLOAT if FLOAT in {self.kind(a) for a in node.args} else INT
+            if name == "int":
+                return INT
+            if name == "point":
+                return POINT
+        return FLOAT
+
+    @property
+    def warp(self) -> bool:
+        return self.dialect == "warp"
+
+    def to_float(self, node):
+        """``node`` (already printed) cast to the float type where Warp needs it."""
+        return ast.Call(ast.Attribute(ast.Name("wp"), self.float_name), [node], [])
+
+    def printed_float(self, original):
+        printed = self.visit(original)
+        if self.warp and self.kind(original) == INT:
+            return self.to_float(printed)
+        return printed
+
+    def visit_Name(self, node):
+        if node.id == "D":
+            return ast.Constant(self.dim)
+        return node
+
+    def visit_Constant(self, node):
+        if self.warp and isinstance(node.value, float):
+            return self.to_float(ast.Constant(node.value))
+        return node
+
+    def visit_Attribute(self, node):  # math.pi, math.e
+        return self.visit_Constant(ast.Constant(MATH_CONSTANTS[node.attr]))
+
+    def visit_BinOp(self, node):
+        mixed = self.kind(node) == FLOAT
+        left = self.printed_float(node.left) if mixed else self.visit(node.left)
+        right = self.printed_float(node.right) if mixed else self.visit(node.right)
+        if self.warp and isinstance(node.op, ast.Pow):
+            if mixed:
+                return ast.Call(ast.Attribute(ast.Name("wp"), "pow"), [left, right], [])
+        return ast.BinOp(left, node.op, right)
+
+    def visit_Compare(self, node):
+        values = [node.left, *node.comparators]
+        mixed = FLOAT in {self.kind(v) for v in values}
+        printed = [self.printed_float(v) if mixed else self.visit(v) for v in values]
+        if len(node.ops) == 1:
+            return ast.Compare(printed[0], node.ops, [printed[1]])
+        # Chains become explicit conjunctions (Warp does not chain comparisons).
+        parts = [ast.Compare(printed[i], [op], [printed[i + 1]]) for i, op in enumerate(node.ops)]
+        return ast.BoolOp(ast.And(), parts)
+
+    def visit_IfExp(self, node):
+        mixed = self.kind(node) == FLOAT
+        body = self.printed_float(node.body) if mixed else self.visit(node.body)
+        orelse = self.printed_float(node.orelse) if mixed else self.visit(node.orelse)
+        return ast.IfExp(self.visit(node.test), body, orelse)
+
+    def visit_Call(self, node):
+        func = node.func
+        if isinstance(func, ast.Attribute):  # math.f
+            args = [self.printed_float(a) for a in node.args]
+            if self.warp:
+                name = "abs" if func.attr == "fabs" else func.attr
+                return ast.Call(ast.Attribute(ast.Name("wp"), name), args, [])
+            return ast.Call(func, args, [])
+        name = func.id
+        if name in ("min", "max", "abs"):
+            mixed = self.kind(node) == FLOAT
+            args = [self.printed_float(a) if mixed else self.visit(a) for a in node.args]
+            if not self.warp:
+                return ast.Call(func, args, [])
+            result = args[0]
+            if name == "abs":
+                return ast.Call(ast.Attribute(ast.Name("wp"), "abs"), [result], [])
+            for arg in args[1:]:  # wp.min/wp.max take two arguments
+                result = ast.Call(ast.Attribute(ast.Name("wp"), name), [result, arg], [])
+            return result
+        if name == "float":
+            arg = self.visit(node.args[0])
+            return self.to_float(arg) if self.warp else ast.Call(func, [arg], [])
+        if name == "point":
+            if self.dialect == "warp":
+                return ast.Call(ast.Name("VecD"), [], [])
+            if self.dialect == "cuda":
+                return ast.parse(f"cuda.local.array({self.dim}, {self.float_name})", mode="eval").body
+            return ast.parse(f"np.empty({self.dim})", mode="eval").body
+        return ast.Call(func, [self.visit(a) for a in node.args], [])
+
+    def visit_Assign(self, node):
+        target = node.targets[0]
+        value = self.float_value_for(target, node.value)
+        return ast.Assign([self.visit(target)], value)
+
+    def visit_AugAssign(self, node):
+        target = node.target
+        if self.warp and isinstance(target, ast.Name) and self.types.get(target.id) == FLOAT:
+            value = self.printed_float(node.value)
+        else:
+            value = self.visit(node.value)
+        return ast.AugAssign(self.visit(target), node.op, value)
+
+    def float_value_for(self, target, value):
+        wants_float = isinstance(target, ast.Subscript) or self.types.get(getattr(target, "id", None)) == FLOAT
+        return self.printed_float(value) if wants_float else self.visit(value)
+
+    def visit_Return(self, node):
+        return ast.Return(self.printed_float(node.value))
+
+    def visit_For(self, node):
+        node.iter = ast.Call(node.iter.func, [self.visit(a) for a in node.iter.args], [])
+        node.body = [self.visit(s) for s in node.body]
+        return node
+
+
+def render(kernel: Kernel, dialect: str, dim: int, float_name: str = "float64") -> str:
+    """Source text of a checked kernel in ``dialect`` for dimension ``dim``."""
+    if dialect not in ("numba", "cuda", "warp"):
+        raise ValueError(f"unknown dialect {dialect!r}")
+    printed = _Printer(dialect, dim, kernel.types, float_name).visit(copy.deepcopy(kernel.function))
+    annotations = {POINT: "Any", ARRAY: f"wp.array(dtype=wp.{float_name})", INT: "int",
+                   FLOAT: f"wp.{float_name}"}
+    for arg, kind in zip(printed.args.args, kernel.signature.types):
+        arg.annotation = ast.parse(annotations[kind], mode="eval").body if dialect == "warp" else None
+    if dialect == "warp":
+        printed.decorator_list = [ast.parse("wp.func", mode="eval").body]
+    ast.fix_missing_locations(printed)
+    return ast.unparse(printed)

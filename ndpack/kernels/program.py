@@ -1,0 +1,112 @@
+"""A shape as a kernel program: scalar functions in the kernel language plus flat parameters.
+
+Each oracle adds itself with ``_kernel(program) -> name``: it appends its numbers to the flat
+parameter array, uses library functions (:mod:`ndpack.kernels.library`) or defines small
+wrappers, and returns the name of a function ``name(p, prm)`` giving its signed distance.
+The program's text depends only on the shape's structure and dimension, never on its numbers,
+so equal structures share one compiled module (the cache key is that text).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import inspect
+
+import numpy as np
+
+from ..errors import KernelError
+from . import library
+from .language import Kernel
+
+#: Name of the entry function every compiled module exposes.
+ENTRY = "sd"
+
+
+class Program:
+    """Kernel functions of one shape, in call order, and its parameters.
+
+    Parameters
+    ----------
+    dim : int
+        Dimension of the points.
+    """
+
+    def __init__(self, dim: int):
+        self.dim = int(dim)
+        self.kernels: dict[str, Kernel] = {}
+        self.params: list[float] = []
+        self._shapes: dict[int, str] = {}
+        self._defined = 0
+
+    # ------------------------------------------------------------------ building
+    def add_params(self, values) -> int:
+        """Append float values to the parameter array; returns the offset of the first."""
+        offset = len(self.params)
+        self.params.extend(float(v) for v in np.ravel(np.asarray(values, dtype=np.float64)))
+        return offset
+
+    def use(self, fn) -> str:
+        """Add a library function (and the library functions it calls); returns its name."""
+        name = fn.__name__
+        if name not in self.kernels:
+            source = inspect.getsource(fn)
+            for other in library.__dict__.values():
+                if inspect.isfunction(other) and other is not fn and f"{other.__name__}(" in source:
+                    self.use(other)
+            self.kernels[name] = Kernel(fn, callees=self.kernels)
+        return name
+
+    def define(self, source: str) -> str:
+        """Add a generated function written as ``def _(p, prm): ...``; returns its unique name."""
+        name = f"k{self._defined}"
+        self._defined += 1
+        if not source.lstrip().startswith("def _("):
+            raise ValueError("generated kernels are written as 'def _(p, prm): ...'")
+        self.kernels[name] = Kernel(source.replace("def _(", f"def {name}(", 1), callees=self.kernels)
+        return name
+
+    def add_kernel(self, kernel: Kernel) -> str:
+        """Add an already checked kernel (a user's plug-in); returns its name."""
+        if kernel.name in self.kernels and self.kernels[kernel.name] is not kernel:
+            raise KernelError(f"two kernels are named {kernel.name!r}; rename one")
+        self.kernels[kernel.name] = kernel
+        return kernel.name
+
+    def shape(self, oracle) -> str:
+        """Name of the distance function of ``oracle`` (a child in a CSG tree), added once."""
+        key = id(oracle)
+        if key not in self._shapes:
+            kernel = getattr(oracle, "_kernel", None)
+            if kernel is None:
+                raise KernelError(f"{oracle!r} has no scalar kernel")
+            self._shapes[key] = kernel(self)
+        return self._shapes[key]
+
+    # ------------------------------------------------------------------ output
+    def source(self, dialect: str, float_name: str = "float64") -> str:
+        """All functions in ``dialect``, then ``sd(p, prm)`` calling the shape's entry."""
+        parts = [kernel.render(dialect, self.dim, float_name) for kernel in self.kernels.values()]
+        return "\n\n\n".join(parts) + "\n"
+
+    @property
+    def key(self) -> str:
+        """Hash of the program's structure: equal keys compile to equal code."""
+        return hashlib.sha1(f"{self.dim}\n{self.source('numba')}".encode()).hexdigest()[:16]
+
+    def param_array(self, dtype=np.float64) -> np.ndarray:
+        """(k,) the flat parameters; never empty (some compilers reject empty arrays)."""
+        return np.array(self.params or [0.0], dtype=dtype)
+
+
+def build(shape) -> Program:
+    """The kernel program of ``shape``, whose distance function is ``program.entry``.
+
+    Raises
+    ------
+    KernelError
+        If a part of the shape has no scalar kernel (a NumPy-only plug-in).
+    """
+    program = Program(shape.dim)
+    entry = program.shape(shape)
+    program.kernels[ENTRY] = Kernel(f"def {ENTRY}(p, prm):\n    return {entry}(p, prm)\n", callees=program.kernels)
+    return program
