@@ -121,7 +121,8 @@ class _ProtoSphere:
         self.polish_steps = cooling_schedule(POLISH_ITERATIONS, POLISH_EPS_START, POLISH_EPS_END, POLISH_POWER)
         self.restarts = restarts
         self.rng = rng
-        self.margin = SAFETY_MARGIN * shape.scale
+        # A float32 backend's clearances are good to about 1e-7 of the scale: it asks for more.
+        self.margin = max(SAFETY_MARGIN, getattr(backend, "margin", SAFETY_MARGIN)) * shape.scale
         self.count = 0
         self.centers = np.empty((64, self.dim))
         self.radii = np.empty(64)
@@ -296,6 +297,7 @@ def pack(
     restarts: int = 8,
     seed: int | None = 0,
     backend=None,
+    device=None,
     progress: bool | None = None,
 ) -> Packing:
     """Fill ``shape`` with non-overlapping spheres, largest first (ProtoSphere).
@@ -323,7 +325,11 @@ def pack(
     seed : int or None
         Seed of the random prototype placement; equal seeds give equal packings.
     backend : str or Backend, optional
-        Which backend runs the hot loops (see :mod:`ndpack.backends`).
+        Which backend runs the hot loops: ``"numpy"``, ``"numba"``, ``"numba-cuda"``, ``"warp"``
+        or an instance. Default: the ``ndpack.backends.use`` block, ``$NDPACK_BACKEND``, else
+        the fastest that works here (see :mod:`ndpack.backends`).
+    device : str, optional
+        ``"cpu"`` or ``"cuda:N"`` for the backends that run on both (warp, numba-cuda).
     progress : bool, optional
         Show a progress bar; by default only when stderr is a terminal.
 
@@ -336,12 +342,12 @@ def pack(
     check_compatible(shape)
     _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts)
     check_packable(shape)
-    backend = get_backend(backend)
+    backend = get_backend(backend, device=device, shape=shape)
     counts = grid_counts(shape.bounds, grid)
     params = dict(
         n=int(n), min_radius=float(min_radius), fill=fill, time_budget=time_budget,
         grid=counts.tolist(), iterations=int(iterations), batch=int(batch),
-        restarts=int(restarts), seed=seed, backend=backend.name,
+        restarts=int(restarts), seed=seed, backend=backend.name, device=str(getattr(backend, "device", "cpu")),
         eps_start=EPS_START, eps_end=EPS_END, cooling_power=COOLING_POWER,
         polish_iterations=POLISH_ITERATIONS, polish_window=POLISH_WINDOW, safety_margin=SAFETY_MARGIN,
     )
@@ -406,13 +412,14 @@ def pack(
         stop_reason=stop_reason,
         shape=shape,
     )
-    return _ensure_valid(packing, shape, state.margin)
+    return _ensure_valid(packing, shape, state.margin, getattr(backend, "precision", "float64"))
 
 
-def _ensure_valid(packing: Packing, shape: Oracle, margin: float) -> Packing:
+def _ensure_valid(packing: Packing, shape: Oracle, margin: float, precision: str = "float64") -> Packing:
     """Verify in float64; shrink (or drop) any sphere that fails, so no invalid packing escapes.
 
-    With a conservative oracle this never triggers; it guards against plug-ins that are not.
+    With a conservative oracle and a float64 backend this never triggers; it guards against
+    plug-ins that are not conservative, and against float32 rounding on the GPU.
     """
     report = verify(packing, shape)
     if report.ok:
@@ -426,11 +433,16 @@ def _ensure_valid(packing: Packing, shape: Oracle, margin: float) -> Packing:
         gap = np.linalg.norm(packing.centers[later] - packing.centers[other]) - radii[other]
         radii[later] = min(radii[later], gap - margin)
     keep = radii > 0
+    if precision != "float64":
+        cause = f"The {precision} backend's rounding exceeded its safety margin."
+    else:
+        cause = (
+            "The shape's distance is probably not conservative (1-Lipschitz); see "
+            "ndpack.Function.check_lipschitz"
+        )
     warnings.warn(
         f"{len(report.outside)} sphere(s) poked out and {len(report.overlapping)} pair(s) "
-        f"overlapped ({report.summary()}); they were shrunk and {int((~keep).sum())} dropped. "
-        "The shape's distance is probably not conservative (1-Lipschitz); see "
-        "ndpack.Function.check_lipschitz",
+        f"overlapped ({report.summary()}); they were shrunk and {int((~keep).sum())} dropped. {cause}",
         RuntimeWarning,
         stacklevel=3,
     )

@@ -44,6 +44,15 @@ class Backend:
         """
         raise NotImplementedError
 
+    def free_space(self, shape, points, centers, radii, neighbours):
+        """Clearance (n,) and the direction (n, d) away from each point's nearest obstacle.
+
+        The direction is ``-grad`` of the shape's distance where the boundary is nearest (unit
+        for an exact distance), else the unit vector from the nearest sphere's centre. Arguments
+        as in :meth:`clearance`.
+        """
+        raise NotImplementedError
+
     def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
         """Move each prototype ``p <- p + eps * (p - q)`` away from its nearest obstacle point ``q``.
 
@@ -116,3 +125,14 @@ def compiled_program(shape):
         cached = (program, program.param_array())
         shape.__dict__["_ndpack_program"] = cached
     return cached
+
+
+def has_kernel(shape) -> bool:
+    """Whether ``shape`` compiles to a scalar kernel (so the compiled backends can run it)."""
+    from ..errors import BackendError
+
+    try:
+        compiled_program(shape)
+    except BackendError:
+        return False
+    return True

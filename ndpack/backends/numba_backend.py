@@ -17,9 +17,9 @@ KERNELS = Path(__file__).with_name("numba_kernels.py").read_text()
 
 #: Entry points: a parallel loop over prototypes (or boxes) calling the per-point functions.
 ENTRIES = '''
-def clearance_all(points, prm, centers, radii, nbr, out):
+def clearance_all(points, prm, centers, radii, nbr, out, out_direction):
     for i in prange(points.shape[0]):
-        clearance_one(i, points, prm, centers, radii, nbr, out)
+        clearance_one(i, points, prm, centers, radii, nbr, out, out_direction)
 
 
 def converge_all(points, lower, upper, prm, centers, radii, nbr, steps, out_points, out_clearance):
@@ -103,11 +103,18 @@ class NumbaBackend(Backend):
             self.numba.set_num_threads(previous)
 
     def clearance(self, shape, points, centers, radii, neighbours):
+        return self._free_space(shape, points, centers, radii, neighbours, directions=False)[0]
+
+    def free_space(self, shape, points, centers, radii, neighbours):
+        return self._free_space(shape, points, centers, radii, neighbours, directions=True)
+
+    def _free_space(self, shape, points, centers, radii, neighbours, directions):
         namespace, params = self._kernels(shape)
         out = np.empty(len(points))
+        out_direction = np.empty((len(points) if directions else 0, shape.dim))
         self._run(namespace["clearance_all"], _f64(points), params, _f64(centers), _f64(radii),
-                  _i64(neighbours), out)
-        return out
+                  _i64(neighbours), out, out_direction)
+        return out, out_direction
 
     def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
         namespace, params = self._kernels(shape)

@@ -56,12 +56,16 @@ def free_space(x, g, prm, centers, radii, nbr, row):
     return clearance
 
 
-def clearance_one(i, points, prm, centers, radii, nbr, out):
+def clearance_one(i, points, prm, centers, radii, nbr, out, out_direction):
+    """Clearance of point ``i`` into ``out``; its direction into ``out_direction`` if that has rows."""
     x = point()
     g = point()
     for k in range(D):
         x[k] = points[i, k]
     out[i] = free_space(x, g, prm, centers, radii, nbr, i)
+    if out_direction.shape[0] > i:
+        for k in range(D):
+            out_direction[i, k] = g[k]
 
 
 def converge_one(i, points, lower, upper, prm, centers, radii, nbr, steps, out_points, out_clearance):

@@ -60,8 +60,11 @@ class NumpyBackend(Backend):
         return clearance, direction
 
     def clearance(self, shape, points, centers, radii, neighbours):
+        return self.free_space(shape, points, centers, radii, neighbours)[0]
+
+    def free_space(self, shape, points, centers, radii, neighbours):
         centers, radii = _with_sphere_at_infinity(centers, radii)
-        return self._free_space(shape, points, centers[neighbours], radii[neighbours])[0]
+        return self._free_space(shape, points, centers[neighbours], radii[neighbours])
 
     def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
         centers, radii = _with_sphere_at_infinity(centers, radii)

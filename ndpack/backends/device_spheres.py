@@ -1,0 +1,61 @@
+"""A device copy of the driver's growing sphere arrays, shared by the GPU backends.
+
+The driver only appends spheres, so each call copies up only the spheres added since the last
+one. A prefix that no longer matches (checked on its first and last sphere) starts a fresh copy.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class DeviceSpheres:
+    """Sphere centres (m, d) and radii (m,) mirrored on a device.
+
+    Parameters
+    ----------
+    empty : callable
+        ``empty(capacity, dim) -> (centers, radii)``: new device arrays.
+    write : callable
+        ``write(centers, radii, start, host_centers, host_radii)``: copy host rows into the
+        device arrays from row ``start`` on.
+    keep : callable
+        ``keep(new_centers, new_radii, old_centers, old_radii, count)``: copy the first ``count``
+        rows of the old device arrays into the new ones.
+    view : callable
+        ``view(array, count)``: the first ``count`` rows of a device array.
+    """
+
+    def __init__(self, empty, write, keep, view):
+        self.empty, self.write, self.keep, self.view = empty, write, keep, view
+        self.count = 0
+        self.first = self.last = None
+        self.centers = self.radii = None
+        self.dim = None
+
+    def sync(self, centers: np.ndarray, radii: np.ndarray):
+        """Device views equal to ``centers`` (m, d) float64 and ``radii`` (m,) float64."""
+        count, dim = centers.shape
+        same_prefix = (
+            self.centers is not None and dim == self.dim and count >= self.count
+            and (self.count == 0 or (np.array_equal(centers[0], self.first)
+                                     and np.array_equal(centers[self.count - 1], self.last)))
+        )
+        if not same_prefix:
+            self.count = 0
+        if not same_prefix or count > self.capacity:
+            capacity = max(64, 2 * count)
+            new_centers, new_radii = self.empty(capacity, dim)
+            if self.count:
+                self.keep(new_centers, new_radii, self.centers, self.radii, self.count)
+            self.centers, self.radii, self.dim = new_centers, new_radii, dim
+        if count > self.count:
+            self.write(self.centers, self.radii, self.count,
+                       np.ascontiguousarray(centers[self.count :]), np.ascontiguousarray(radii[self.count :]))
+            self.count = count
+            self.first, self.last = centers[0].copy(), centers[count - 1].copy()
+        return self.view(self.centers, count), self.view(self.radii, count)
+
+    @property
+    def capacity(self) -> int:
+        return 0 if self.radii is None else self.radii.shape[0]

@@ -1,0 +1,191 @@
+"""The Numba CUDA backend: the Numba backend's per-point work as CUDA kernels, one thread each.
+
+The per-point functions are the CPU backend's (:mod:`ndpack.backends.numba_kernels`), compiled
+as device functions. The inserted spheres live on the device and only new ones are copied up
+(:class:`~ndpack.backends.device_spheres.DeviceSpheres`); prototypes travel per call. float64 throughout: an H100 runs float64 at
+half its float32 rate, and the packing stays as exact as the CPU's.
+
+Without a GPU, set ``NUMBA_ENABLE_CUDASIM=1`` to run the same kernels in Numba's CUDA simulator
+(slow; for tests).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import BackendError
+from .base import Backend, compiled_program
+from .device_spheres import DeviceSpheres
+from .numba_backend import FD_STEP, KERNELS
+
+ENTRIES = '''
+def clearance_all(points, prm, centers, radii, nbr, out, out_direction):
+    i = cuda.grid(1)
+    if i < points.shape[0]:
+        clearance_one(i, points, prm, centers, radii, nbr, out, out_direction)
+
+
+def converge_all(points, lower, upper, prm, centers, radii, nbr, steps, out_points, out_clearance):
+    i = cuda.grid(1)
+    if i < points.shape[0]:
+        converge_one(i, points, lower, upper, prm, centers, radii, nbr, steps, out_points, out_clearance)
+
+
+def near_count(lower, upper, reach, centers, radii, counts, out):
+    b = cuda.grid(1)
+    if b < lower.shape[0]:
+        counts[b] = near_one(b, lower, upper, reach, centers, radii, out, 0)
+
+
+def near_fill(lower, upper, reach, centers, radii, out):
+    b = cuda.grid(1)
+    if b < lower.shape[0]:
+        near_one(b, lower, upper, reach, centers, radii, out, out.shape[1])
+
+
+def touched_all(points, clearance, centers, radii, out):
+    i = cuda.grid(1)
+    if i < points.shape[0]:
+        touched_one(i, points, clearance, centers, radii, out)
+'''
+ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all")
+THREADS_PER_BLOCK = 128
+
+
+class NumbaCudaBackend(Backend):
+    """Numba CUDA kernels on one GPU (or the CUDA simulator), float64.
+
+    Parameters
+    ----------
+    device : int
+        CUDA device number.
+    """
+
+    name = "numba-cuda"
+
+    def __init__(self, device: int = 0):
+        from numba import cuda
+
+        if not cuda.is_available():
+            raise BackendError(
+                "numba-cuda found no usable CUDA GPU (driver or device missing); set "
+                "NUMBA_ENABLE_CUDASIM=1 to run its kernels on the CPU simulator"
+            )
+        self.cuda = cuda
+        self.device = int(device)
+        cuda.select_device(self.device)
+        self._namespaces = {}
+        self._geometries = {}
+        self._spheres = DeviceSpheres(
+            empty=lambda capacity, dim: (cuda.device_array((capacity, dim)), cuda.device_array(capacity)),
+            write=_write_rows,
+            keep=_keep_rows,
+            view=lambda array, count: array[:count],
+        )
+
+    def _jit(self, namespace, names):
+        cuda = self.cuda
+        for name in names:
+            if name in ENTRY_NAMES:
+                namespace[name] = cuda.jit(namespace[name])
+            else:
+                namespace[name] = cuda.jit(device=True)(namespace[name])
+
+    def _kernels(self, shape):
+        from ..kernels.compile import numba_namespace
+
+        program, params = compiled_program(shape)
+        if id(program) not in self._namespaces:
+            namespace = numba_namespace(
+                program, "cuda", KERNELS + ENTRIES, {"H": FD_STEP * shape.scale}, self._jit
+            )
+            self._namespaces[id(program)] = (program, namespace, self.cuda.to_device(params))
+        return self._namespaces[id(program)][1:]
+
+    def _geometry(self, dim):
+        """The shape-free kernels (near_spheres, touched) for dimension ``dim``."""
+        from ..kernels.compile import numba_namespace
+        from ..kernels.program import Program
+
+        if dim not in self._geometries:
+            program = Program(dim)
+            program.define("def _(p, prm):\n    return 0.0\n")
+            self._geometries[dim] = numba_namespace(program, "cuda", KERNELS + ENTRIES, {"H": 1.0}, self._jit)
+        return self._geometries[dim]
+
+    def _launch(self, kernel, count, *args):
+        if count:
+            blocks = (count + THREADS_PER_BLOCK - 1) // THREADS_PER_BLOCK
+            kernel[blocks, THREADS_PER_BLOCK](*args)
+
+    def _spheres_and_table(self, centers, radii, neighbours):
+        dim = centers.shape[1]
+        if len(centers) == 0:  # one sphere at infinity keeps every array non-empty
+            centers, radii = np.full((1, dim), 1e300), np.zeros(1)
+        d_centers, d_radii = self._spheres.sync(np.asarray(centers, np.float64), np.asarray(radii, np.float64))
+        table = neighbours if neighbours.shape[1] else np.full((len(neighbours), 1), len(centers))
+        return d_centers, d_radii, self.cuda.to_device(np.ascontiguousarray(table, dtype=np.int64))
+
+    def clearance(self, shape, points, centers, radii, neighbours):
+        return self._free_space(shape, points, centers, radii, neighbours, directions=False)[0]
+
+    def free_space(self, shape, points, centers, radii, neighbours):
+        return self._free_space(shape, points, centers, radii, neighbours, directions=True)
+
+    def _free_space(self, shape, points, centers, radii, neighbours, directions):
+        namespace, params = self._kernels(shape)
+        d_centers, d_radii, table = self._spheres_and_table(centers, radii, neighbours)
+        out = self.cuda.device_array(max(len(points), 1), dtype=np.float64)
+        out_direction = self.cuda.device_array((len(points) if directions else 0, shape.dim), dtype=np.float64)
+        self._launch(namespace["clearance_all"], len(points), self.cuda.to_device(_f64(points)), params,
+                     d_centers, d_radii, table, out, out_direction)
+        return out.copy_to_host()[: len(points)], out_direction.copy_to_host()
+
+    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
+        namespace, params = self._kernels(shape)
+        d_centers, d_radii, table = self._spheres_and_table(centers, radii, neighbours)
+        to = self.cuda.to_device
+        out_points = self.cuda.device_array(points.shape, dtype=np.float64)
+        out_clearance = self.cuda.device_array(len(points), dtype=np.float64)
+        self._launch(namespace["converge_all"], len(points), to(_f64(points)), to(_f64(cell_lower)),
+                     to(_f64(cell_upper)), params, d_centers, d_radii, table, to(_f64(steps)),
+                     out_points, out_clearance)
+        return out_points.copy_to_host(), out_clearance.copy_to_host()
+
+    def near_spheres(self, box_lower, box_upper, reach, centers, radii):
+        count = len(box_lower)
+        if len(centers) == 0 or count == 0:
+            return np.zeros((count, 0), dtype=np.int64)
+        namespace = self._geometry(box_lower.shape[1])
+        d_centers, d_radii = self._spheres.sync(_f64(centers), _f64(radii))
+        to = self.cuda.to_device
+        args = (to(_f64(box_lower)), to(_f64(box_upper)), to(_f64(reach)), d_centers, d_radii)
+        counts = self.cuda.device_array(count, dtype=np.int64)
+        self._launch(namespace["near_count"], count, *args, counts, self.cuda.device_array((1, 1), dtype=np.int64))
+        width = int(counts.copy_to_host().max())
+        out = to(np.full((count, max(width, 1)), len(centers), dtype=np.int64))
+        if width:
+            self._launch(namespace["near_fill"], count, *args, out)
+        return out.copy_to_host()[:, :width]
+
+    def touched(self, points, clearance, new_centers, new_radii):
+        namespace = self._geometry(points.shape[1])
+        to = self.cuda.to_device
+        out = self.cuda.device_array(len(points), dtype=np.bool_)
+        self._launch(namespace["touched_all"], len(points), to(_f64(points)), to(_f64(clearance)),
+                     to(_f64(new_centers)), to(_f64(new_radii)), out)
+        return out.copy_to_host()
+
+
+def _write_rows(centers, radii, start, host_centers, host_radii):
+    centers[start : start + len(host_radii)].copy_to_device(host_centers)
+    radii[start : start + len(host_radii)].copy_to_device(host_radii)
+
+
+def _keep_rows(new_centers, new_radii, old_centers, old_radii, count):
+    new_centers[:count].copy_to_device(old_centers[:count])
+    new_radii[:count].copy_to_device(old_radii[:count])
+
+
+def _f64(array):
+    return np.ascontiguousarray(array, dtype=np.float64)

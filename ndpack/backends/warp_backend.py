@@ -1,0 +1,218 @@
+"""The NVIDIA Warp backend: one Warp thread per prototype, on ``cpu`` or ``cuda:N``.
+
+A shape's kernel program is printed in Warp's dialect and written, with the kernels of
+:mod:`ndpack.backends.warp_kernels`, into one generated module (see
+:func:`ndpack.kernels.compile.warp_module`); Warp compiles and caches it. The inserted spheres
+live on the device (:class:`~ndpack.backends.device_spheres.DeviceSpheres`).
+
+Precision: float64 by default. ``precision="float32"`` runs the kernels in float32 (faster on
+GPUs without full float64 rate); clearances are then accurate to about 1e-7 of the shape's size,
+so the driver shrinks radii by :attr:`WarpBackend.margin` of the size, and the packing is still
+verified (and repaired) in float64 before it is returned.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import BackendError
+from .base import Backend, compiled_program
+from .device_spheres import DeviceSpheres
+
+KERNELS = Path(__file__).with_name("warp_kernels.py").read_text()
+#: Central-difference step as a fraction of the shape's scale, per precision.
+FD_STEP = {"float64": 1e-6, "float32": 1e-3}
+#: Radius safety margin as a fraction of the shape's scale, per precision.
+MARGIN = {"float64": 1e-10, "float32": 2e-6}
+
+
+class WarpBackend(Backend):
+    """NVIDIA Warp kernels.
+
+    Parameters
+    ----------
+    device : str, optional
+        ``"cpu"``, ``"cuda"`` or ``"cuda:N"``; default the first CUDA device, else the CPU.
+    precision : {"float64", "float32"}
+    """
+
+    name = "warp"
+
+    def __init__(self, device: str | None = None, precision: str = "float64"):
+        import warp as wp
+
+        if precision not in FD_STEP:
+            raise BackendError(f"precision must be 'float64' or 'float32', got {precision!r}")
+        _quiet(wp)
+        wp.init()
+        if device is None:
+            device = "cuda:0" if wp.is_cuda_available() else "cpu"
+        try:
+            self.device = wp.get_device(device)
+        except (ValueError, RuntimeError) as error:
+            raise BackendError(f"Warp cannot use device {device!r} ({error}); try 'cpu' or 'cuda:0'") from None
+        if self.device.is_cpu and not _cpu_compiler_available(wp):
+            raise BackendError("Warp's CPU compiler is not available here; use device='cuda:0' or backend='numba'")
+        self.wp = wp
+        self.precision = precision
+        self.margin = MARGIN[precision]
+        self.float = np.float64 if precision == "float64" else np.float32
+        self._modules = {}
+        self._spheres = {}
+
+    def __repr__(self):
+        return f"<ndpack backend 'warp' on {self.device} ({self.precision})>"
+
+    # ------------------------------------------------------------------ compilation
+    def _module(self, shape):
+        from ..kernels.compile import warp_module
+
+        program, params = compiled_program(shape)
+        key = id(program)
+        if key not in self._modules:
+            module = warp_module(program, self.precision, KERNELS)
+            self.wp.load_module(module, device=self.device)
+            h = self.float(FD_STEP[self.precision] * shape.scale)
+            self._modules[key] = (program, module, self._array(params, module.F), h)
+        return self._modules[key][1:]
+
+    def _geometry(self, dim):
+        from ..kernels.program import Program
+
+        if dim not in self._modules:
+            program = Program(dim)
+            program.define("def _(p, prm):\n    return 0.0\n")
+            from ..kernels.program import ENTRY, Kernel
+
+            program.kernels[ENTRY] = Kernel(f"def {ENTRY}(p, prm):\n    return k0(p, prm)\n", program.kernels)
+            from ..kernels.compile import warp_module
+
+            module = warp_module(program, self.precision, KERNELS)
+            self.wp.load_module(module, device=self.device)
+            self._modules[dim] = (program, module)
+        return self._modules[dim][1]
+
+    # ------------------------------------------------------------------ arrays
+    def _array(self, host, dtype):
+        return self.wp.array(np.ascontiguousarray(host, dtype=_numpy_type(dtype, self.float)), dtype=dtype,
+                             device=self.device)
+
+    def _points(self, module, host):
+        return self._array(host, module.VecD)
+
+    def _sphere_mirror(self, module, dim):
+        if dim not in self._spheres:
+            wp, device = self.wp, self.device
+
+            def empty(capacity, d):
+                return wp.empty(capacity, dtype=module.VecD, device=device), wp.empty(capacity, dtype=module.F, device=device)
+
+            def write(centers, radii, start, host_centers, host_radii):
+                wp.copy(centers, self._array(host_centers, module.VecD), dest_offset=start)
+                wp.copy(radii, self._array(host_radii, module.F), dest_offset=start)
+
+            def keep(new_centers, new_radii, old_centers, old_radii, count):
+                wp.copy(new_centers, old_centers, count=count)
+                wp.copy(new_radii, old_radii, count=count)
+
+            self._spheres[dim] = DeviceSpheres(empty, write, keep, lambda array, count: array[:count])
+        return self._spheres[dim]
+
+    def _spheres_and_table(self, module, centers, radii, neighbours):
+        dim = module.D
+        if len(centers) == 0:  # one sphere far away keeps every array non-empty
+            centers, radii = np.full((1, dim), 1e30), np.zeros(1)
+        d_centers, d_radii = self._sphere_mirror(module, dim).sync(np.asarray(centers, np.float64), np.asarray(radii, np.float64))
+        table = neighbours if neighbours.shape[1] else np.full((len(neighbours), 1), len(centers))
+        return d_centers, d_radii, self._array(table, self.wp.int32)
+
+    # ------------------------------------------------------------------ operations
+    def clearance(self, shape, points, centers, radii, neighbours):
+        return self._free_space(shape, points, centers, radii, neighbours, directions=False)[0]
+
+    def free_space(self, shape, points, centers, radii, neighbours):
+        return self._free_space(shape, points, centers, radii, neighbours, directions=True)
+
+    def _free_space(self, shape, points, centers, radii, neighbours, directions):
+        module, params, h = self._module(shape)
+        d_centers, d_radii, table = self._spheres_and_table(module, centers, radii, neighbours)
+        out = self.wp.empty(len(points), dtype=module.F, device=self.device)
+        out_direction = self.wp.empty(len(points) if directions else 0, dtype=module.VecD, device=self.device)
+        if len(points):
+            self.wp.launch(module.clearance_all, dim=len(points), device=self.device, inputs=[
+                self._points(module, points), params, d_centers, d_radii, table, h, out, out_direction,
+            ])
+        direction = out_direction.numpy().reshape(-1, shape.dim).astype(np.float64)
+        return out.numpy().astype(np.float64), direction
+
+    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
+        module, params, h = self._module(shape)
+        d_centers, d_radii, table = self._spheres_and_table(module, centers, radii, neighbours)
+        out_points = self.wp.empty(len(points), dtype=module.VecD, device=self.device)
+        out_clearance = self.wp.empty(len(points), dtype=module.F, device=self.device)
+        if len(points):
+            self.wp.launch(module.converge_all, dim=len(points), device=self.device, inputs=[
+                self._points(module, points), self._points(module, cell_lower), self._points(module, cell_upper),
+                params, d_centers, d_radii, table, self._array(steps, module.F), h, out_points, out_clearance,
+            ])
+        return (out_points.numpy().reshape(len(points), -1).astype(np.float64),
+                out_clearance.numpy().astype(np.float64))
+
+    def near_spheres(self, box_lower, box_upper, reach, centers, radii):
+        count = len(box_lower)
+        if len(centers) == 0 or count == 0:
+            return np.zeros((count, 0), dtype=np.int64)
+        module = self._geometry(box_lower.shape[1])
+        d_centers, d_radii = self._sphere_mirror(module, module.D).sync(_f64(centers), _f64(radii))
+        args = [self._points(module, box_lower), self._points(module, box_upper), self._array(reach, module.F),
+                d_centers, d_radii]
+        counts = self.wp.empty(count, dtype=self.wp.int32, device=self.device)
+        self.wp.launch(module.near_count, dim=count, device=self.device, inputs=[*args, counts])
+        width = int(counts.numpy().max())
+        out = self._array(np.full((count, max(width, 1)), len(centers)), self.wp.int32)
+        if width:
+            self.wp.launch(module.near_fill, dim=count, device=self.device, inputs=[*args, out])
+        return out.numpy()[:, :width].astype(np.int64)
+
+    def touched(self, points, clearance, new_centers, new_radii):
+        if len(points) == 0:
+            return np.zeros(0, dtype=bool)
+        module = self._geometry(points.shape[1])
+        out = self.wp.empty(len(points), dtype=self.wp.int32, device=self.device)
+        self.wp.launch(module.touched_all, dim=len(points), device=self.device, inputs=[
+            self._points(module, points), self._array(clearance, module.F),
+            self._points(module, new_centers), self._array(new_radii, module.F), out,
+        ])
+        return out.numpy().astype(bool)
+
+
+def _numpy_type(dtype, float_type):
+    """The NumPy dtype that holds a Warp array of ``dtype`` (points use the float type)."""
+    import warp as wp
+
+    if dtype in (wp.int32,):
+        return np.int32
+    return float_type
+
+
+def _quiet(wp):
+    """Keep Warp's start-up banner and per-module messages out of the user's output."""
+    if hasattr(wp.config, "quiet"):
+        wp.config.quiet = True
+    else:
+        from warp._src.logger import LOG_WARNING  # Warp >= 1.10 replaced quiet with log levels
+
+        wp.config.log_level = max(wp.config.log_level, LOG_WARNING)
+
+
+def _cpu_compiler_available(wp) -> bool:
+    try:
+        return bool(wp.context.runtime.llvm) if hasattr(wp.context.runtime, "llvm") else True
+    except Exception:  # noqa: BLE001 - any failure to ask means we cannot tell; assume it works
+        return True
+
+
+def _f64(array):
+    return np.ascontiguousarray(array, dtype=np.float64)
