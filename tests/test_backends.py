@@ -1,0 +1,235 @@
+"""Every installed backend against the NumPy reference, on the same inputs.
+
+Compiled backends here: numba, warp (on CUDA where it works, else on the CPU), and numba-cuda
+where a GPU works. Without a GPU, numba-cuda runs the ``small`` tests under Numba's CUDA simulator
+in a subprocess (``test_numba_cuda_under_simulator``). On the GPU machine, the same file runs
+both GPU backends: ``python -m pytest tests/test_backends.py``.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import ndpack as nd
+from ndpack import backends
+from ndpack.errors import BackendError
+from ndpack.protosphere import cooling_schedule
+
+SIMULATED = os.environ.get("NUMBA_ENABLE_CUDASIM") == "1"
+
+
+def _working(name, **options):
+    try:
+        backends.get_backend(name, **options)
+        return True
+    except BackendError:
+        return False
+
+
+def _compiled_backends():
+    names = []
+    if not SIMULATED:
+        names.append("numba")
+        if _working("warp"):
+            names.append("warp")
+    if _working("numba-cuda"):
+        names.append("numba-cuda")
+    return names
+
+
+COMPILED = _compiled_backends()
+REFERENCE = backends.get_backend("numpy")
+
+
+def _shapes(dim):
+    """One of each kind that has a kernel in ``dim`` dimensions, plus a CSG tree."""
+    rng = np.random.default_rng(dim)
+    ball = nd.Ball(rng.uniform(-0.2, 0.2, dim), 1.0)
+    box = nd.Box(-np.ones(dim), rng.uniform(0.6, 1.2, dim))
+    return {
+        "ball": ball,
+        "box": box,
+        "csg": (box - nd.Ball(np.ones(dim) * 0.8, 0.7)) | nd.Ball(-0.9 * np.ones(dim), 0.3),
+    }
+
+
+def _inputs(shape, rng, count=300, spheres=25):
+    """Points around the shape, spheres inside its bounds, and the reference's neighbour table."""
+    lower, upper = shape.bounds
+    pad = 0.1 * (upper - lower)
+    points = rng.uniform(lower - pad, upper + pad, (count, shape.dim))
+    centers = rng.uniform(lower, upper, (spheres, shape.dim))
+    radii = rng.uniform(0.01, 0.15, spheres) * shape.scale
+    neighbours = REFERENCE.near_spheres(points, points, np.full(count, 10.0 * shape.scale), centers, radii)
+    return points, centers, radii, neighbours
+
+
+def _tolerance(backend):
+    return 1e-5 if getattr(backend, "precision", "float64") == "float32" else 1e-9
+
+
+@pytest.mark.parametrize("name", COMPILED)
+@pytest.mark.parametrize("dim", [2, 3, 4, 5, 6])
+def test_free_space_matches_reference(name, dim):
+    backend = backends.get_backend(name)
+    rng = np.random.default_rng(10 + dim)
+    for label, shape in _shapes(dim).items():
+        points, centers, radii, neighbours = _inputs(shape, rng)
+        expected_clearance, expected_direction = REFERENCE.free_space(shape, points, centers, radii, neighbours)
+        clearance, direction = backend.free_space(shape, points, centers, radii, neighbours)
+        tol = _tolerance(backend) * shape.scale
+        assert np.abs(clearance - expected_clearance).max() <= tol, label
+        # Directions: the reference's gradient is analytic, the backends' central differences;
+        # both agree except within the difference step of a crease (none at these points).
+        assert np.abs(direction - expected_direction).max() <= 1e3 * _tolerance(backend), label
+        assert np.allclose(backend.clearance(shape, points, centers, radii, neighbours), clearance)
+
+
+@pytest.mark.parametrize("name", COMPILED)
+def test_small_geometry_queries_match_reference(name):
+    backend = backends.get_backend(name)
+    rng = np.random.default_rng(3)
+    for dim in (2, 4):
+        lower = rng.uniform(0, 0.9, (40, dim))
+        upper = lower + 0.1
+        reach = rng.uniform(0.05, 0.3, 40)
+        centers = rng.uniform(0, 1, (30, dim))
+        radii = rng.uniform(0.01, 0.1, 30)
+        expected = REFERENCE.near_spheres(lower, upper, reach, centers, radii)
+        np.testing.assert_array_equal(backend.near_spheres(lower, upper, reach, centers, radii), expected)
+        points = rng.uniform(0, 1, (50, dim))
+        clearance = rng.uniform(0, 0.2, 50)
+        np.testing.assert_array_equal(
+            backend.touched(points, clearance, centers[:4], radii[:4]),
+            REFERENCE.touched(points, clearance, centers[:4], radii[:4]),
+        )
+
+
+@pytest.mark.parametrize("name", COMPILED)
+def test_small_converge_matches_reference(name):
+    backend = backends.get_backend(name)
+    shape = nd.Box([0.0, 0.0], [1.0, 0.6])
+    rng = np.random.default_rng(4)
+    lower = rng.uniform(0, 0.5, (60, 2))
+    upper = lower + 0.1
+    points = rng.uniform(lower, upper)
+    centers, radii = np.array([[0.3, 0.3]]), np.array([0.2])
+    neighbours = np.zeros((60, 1), dtype=np.int64)
+    steps = cooling_schedule(30)
+    expected_points, expected_clearance = REFERENCE.converge(shape, points, lower, upper, centers, radii, neighbours, steps)
+    got_points, got_clearance = backend.converge(shape, points, lower, upper, centers, radii, neighbours, steps)
+    # Finite-difference and analytic directions differ by ~1e-10; the zig-zag around a Voronoi
+    # node amplifies that, but both end at the same node with the same clearance.
+    assert np.abs(got_clearance - expected_clearance).max() < 1e-5
+    assert np.abs(got_points - expected_points).max() < 1e-2
+
+
+# ---------------------------------------------------------------------- packings
+def _pack_cases():
+    return {
+        "square": (nd.Box([0.0, 0.0], [1.0, 1.0]), 150, None),
+        "cube": (nd.Box([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]), 150, None),
+        "box6d": (nd.Box(np.zeros(6), np.ones(6)), 40, 4),
+        "part": (nd.Box([0.0, 0.0, 0.0], [1.0, 1.0, 0.5]) - nd.Ball([1.0, 1.0, 0.5], 0.6), 150, None),
+    }
+
+
+@pytest.fixture(scope="module")
+def reference_packings():
+    return {label: nd.pack(shape, n, grid=grid, backend="numpy") for label, (shape, n, grid) in _pack_cases().items()}
+
+
+@pytest.mark.parametrize("name", [n for n in COMPILED if n != "numba-cuda" or not SIMULATED])
+@pytest.mark.parametrize("label", list(_pack_cases()))
+def test_packings_are_valid_and_fill_like_the_reference(name, label, reference_packings):
+    shape, n, grid = _pack_cases()[label]
+    packing = nd.pack(shape, n, grid=grid, backend=name)
+    assert packing.params["backend"] == name
+    assert len(packing.radii) == n
+    assert packing.verify().ok
+    reference = reference_packings[label]
+    assert abs(packing.fill - reference.fill) <= 0.01 * reference.fill
+
+
+@pytest.mark.parametrize("name", COMPILED)
+def test_small_packing_is_valid(name):
+    shape = nd.Box([0.0, 0.0], [1.0, 1.0])
+    packing = nd.pack(shape, 20, grid=16, backend=name)
+    reference = nd.pack(shape, 20, grid=16, backend="numpy")
+    assert packing.verify().ok
+    assert abs(packing.fill - reference.fill) <= 0.01 * reference.fill
+
+
+@pytest.mark.skipif(not _working("warp"), reason="warp is not installed")
+def test_warp_float32_packing_is_verified_in_float64():
+    backend = backends.get_backend("warp", precision="float32")
+    assert backend.precision == "float32"
+    shape = nd.Box([0.0, 0.0, 0.0], [1.0, 1.0, 1.0])
+    points, centers, radii, neighbours = _inputs(shape, np.random.default_rng(5))
+    expected = REFERENCE.clearance(shape, points, centers, radii, neighbours)
+    assert np.abs(backend.clearance(shape, points, centers, radii, neighbours) - expected).max() < 1e-5
+    packing = nd.pack(shape, 150, backend=backend)
+    assert packing.verify().ok
+    reference = nd.pack(shape, 150, backend="numpy")
+    assert abs(packing.fill - reference.fill) <= 0.01 * reference.fill
+
+
+@pytest.mark.skipif(SIMULATED or _working("numba-cuda"), reason="runs only where there is no GPU")
+def test_numba_cuda_under_simulator():
+    """The numba-cuda kernels, run by Numba's CUDA simulator in a fresh process (the switch
+    must be set before numba.cuda is imported)."""
+    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1")
+    result = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", __file__, "-k", "small and numba-cuda"],
+        env=env, capture_output=True, text=True, timeout=1200,
+    )
+    # Exit code 0 means tests were collected and all passed (no tests collected exits with 5).
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+
+
+# ---------------------------------------------------------------------- selection
+def test_selection_order(monkeypatch):
+    monkeypatch.delenv("NDPACK_BACKEND", raising=False)
+    shape = nd.Box([0.0, 0.0], [1.0, 1.0])
+    automatic = backends.get_backend(shape=shape)
+    assert automatic.name in ("warp", "numba-cuda", "numba")  # never the reference when numba works
+    monkeypatch.setenv("NDPACK_BACKEND", "numba")
+    assert backends.get_backend().name == "numba"
+    with backends.use("numpy"):
+        assert backends.get_backend().name == "numpy"  # the block beats the environment
+        assert backends.get_backend("numba").name == "numba"  # the argument beats the block
+        packing = nd.pack(shape, 5)
+        assert packing.params["backend"] == "numpy"
+    assert backends.get_backend().name == "numba"
+
+
+def test_numpy_only_plugin_falls_back_or_says_what_to_do(monkeypatch):
+    monkeypatch.delenv("NDPACK_BACKEND", raising=False)
+    disc = nd.Function(lambda p: np.linalg.norm(p, axis=1) - 1.0, 2, [[-1, -1], [1, 1]], name="disc")
+    assert backends.get_backend(shape=disc).name == "numpy"
+    assert nd.pack(disc, 3).params["backend"] == "numpy"
+    with pytest.raises(BackendError, match="numpy"):
+        nd.pack(disc, 3, backend="numba")
+
+
+def test_bad_backend_requests_say_what_to_do():
+    with pytest.raises(BackendError, match="choose one of"):
+        backends.get_backend("cuda")
+    with pytest.raises(BackendError, match="CPU only"):
+        backends.get_backend("numba", device="cuda:0")
+    status = backends.available()
+    assert set(status) == {"numpy", "numba", "numba-cuda", "warp"}
+    assert status["numpy"] == "ok" and status["numba"] == "ok"
+    assert all(isinstance(reason, str) and reason for reason in status.values())
+
+
+def test_missing_framework_says_how_to_install(monkeypatch):
+    monkeypatch.setitem(backends._KNOWN, "warp", ("ndpack_no_such_module", "X", 'pip install "ndpack[warp]"'))
+    monkeypatch.setattr(backends, "_instances", {})
+    with pytest.raises(BackendError, match=r"pip install \"ndpack\[warp\]\""):
+        backends.get_backend("warp")
