@@ -2,6 +2,12 @@
 
 A spec is ``name`` or ``name:key=value,key=value``; every shape takes ``dim`` where it makes
 sense. :func:`from_spec` turns a spec into an oracle and explains any mistake.
+
+Third-party packages add named shapes through the entry-point group ``ndpack.shapes``: each
+entry is a factory ``f(**numbers) -> Oracle``. In the package's ``pyproject.toml``::
+
+    [project.entry-points."ndpack.shapes"]
+    gyroid = "my_shapes:gyroid"      # then: ndpack pack gyroid:dim=5
 """
 
 from __future__ import annotations
@@ -49,12 +55,39 @@ BUILTIN = {
 }
 
 
+ENTRY_POINT_GROUP = "ndpack.shapes"
+
+
+def registered() -> dict:
+    """Every named shape: the built-in ones, then those of installed packages (``ndpack.shapes``).
+
+    Returns
+    -------
+    dict
+        Name -> factory. A package cannot replace a built-in name.
+    """
+    from importlib.metadata import entry_points
+
+    shapes = {}
+    for entry in entry_points(group=ENTRY_POINT_GROUP):
+        shapes.setdefault(entry.name.lower(), entry)
+    shapes.update(BUILTIN)
+    return shapes
+
+
 def from_spec(spec: str):
     """Build a named shape from ``name[:key=value,...]``, e.g. ``box:dim=4``."""
     name, _, arguments = spec.partition(":")
     name = name.strip().lower()
-    if name not in BUILTIN:
-        raise ShapeError(f"unknown shape {name!r}; built-in shapes are: {', '.join(BUILTIN)}")
+    shapes = registered()
+    if name not in shapes:
+        raise ShapeError(f"unknown shape {name!r}; known shapes are: {', '.join(shapes)}")
+    factory = shapes[name]
+    if hasattr(factory, "load"):  # an entry point: import the package only now
+        try:
+            factory = factory.load()
+        except Exception as error:  # noqa: BLE001 - any import failure in a third-party package
+            raise ShapeError(f"the package providing shape {name!r} failed to load: {error}") from None
     keywords = {}
     for item in filter(None, (part.strip() for part in arguments.split(","))):
         key, equals, value = item.partition("=")
@@ -68,8 +101,13 @@ def from_spec(spec: str):
     if "dim" in keywords and keywords["dim"] < 1:
         raise ShapeError(f"dim must be a positive integer in {spec!r}")
     try:
-        return BUILTIN[name](**keywords)
+        shape = factory(**keywords)
     except TypeError:
         raise ShapeError(f"shape {name!r} does not take {', '.join(keywords)}") from None
+    from .oracle import Oracle
+
+    if not isinstance(shape, Oracle):
+        raise ShapeError(f"shape {name!r} came back as {type(shape).__name__}, not an ndpack shape")
+    return shape
 
 

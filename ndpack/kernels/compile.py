@@ -116,7 +116,14 @@ _EVALUATE = '''
 def evaluate_all(points, prm, out):
     for i in prange(points.shape[0]):
         out[i] = sd(points[i], prm)
+
+
+def evaluate_serial(points, prm, out):
+    for i in range(points.shape[0]):
+        out[i] = sd(points[i], prm)
 '''
+#: Below this many points one thread is faster than waking Numba's thread pool.
+PARALLEL_FROM = 20_000
 
 
 def numba_evaluator(program):
@@ -130,13 +137,14 @@ def numba_evaluator(program):
     def jit(namespace, names):
         namespace["prange"] = numba.prange
         for name in names:
-            namespace[name] = numba.njit(parallel=True, cache=False)(namespace[name])
+            namespace[name] = numba.njit(parallel=name == "evaluate_all", cache=False)(namespace[name])
 
     namespace = numba_namespace(program, "cpu", _EVALUATE, {}, jit)
-    kernel = namespace["evaluate_all"]
+    parallel, serial = namespace["evaluate_all"], namespace["evaluate_serial"]
 
     def evaluate(points, prm):
         out = np.empty(len(points))
+        kernel = parallel if len(points) >= PARALLEL_FROM else serial
         kernel(np.ascontiguousarray(points, dtype=np.float64), prm, out)
         return out
 

@@ -464,6 +464,10 @@ class _Printer(ast.NodeTransformer):
     def visit_Assign(self, node):
         target = node.targets[0]
         value = self.float_value_for(target, node.value)
+        if self.warp and isinstance(value, ast.Constant) and type(value.value) is int:
+            # Warp treats a name bound to a bare constant as a constant, which a dynamic loop
+            # may not change (``n = 0`` then ``n += 1`` in the loop); int(0) makes a variable.
+            value = ast.Call(ast.Name("int"), [value], [])
         return ast.Assign([self.visit(target)], value)
 
     def visit_AugAssign(self, node):

@@ -9,8 +9,10 @@ so equal structures share one compiled module (the cache key is that text).
 
 from __future__ import annotations
 
+import ast
 import hashlib
 import inspect
+import textwrap
 
 import numpy as np
 
@@ -49,9 +51,13 @@ class Program:
         """Add a library function (and the library functions it calls); returns its name."""
         name = fn.__name__
         if name not in self.kernels:
-            source = inspect.getsource(fn)
+            # The names it calls (from the syntax tree, so a longer name such as rounded_box
+            # does not count as a call of box, nor does a name in a comment).
+            tree = ast.parse(textwrap.dedent(inspect.getsource(fn)))
+            called = {node.func.id for node in ast.walk(tree)
+                      if isinstance(node, ast.Call) and isinstance(node.func, ast.Name)}
             for other in library.__dict__.values():
-                if inspect.isfunction(other) and other is not fn and f"{other.__name__}(" in source:
+                if inspect.isfunction(other) and other is not fn and other.__name__ in called:
                     self.use(other)
             self.kernels[name] = Kernel(fn, callees=self.kernels)
         return name

@@ -14,6 +14,7 @@ from .csg import (
 )
 from .plugin import Function, plugin
 from .polygon import Polygon
+from .scalar import ScalarFunction, scalar_plugin
 from .primitives import (
     Ball,
     Box,
@@ -31,6 +32,6 @@ from .primitives import (
 __all__ = [
     "Ball", "Box", "Capsule", "Complement", "ConvexPolytope", "Cylinder", "Difference",
     "Ellipsoid", "Function", "HalfSpace", "Intersection", "Offset", "Polygon", "Rotate",
-    "RoundedBox", "Scale", "Shell", "Simplex", "Slab", "SmoothUnion", "Torus", "Translate",
-    "Union", "plugin",
+    "RoundedBox", "Scale", "ScalarFunction", "Shell", "Simplex", "Slab", "SmoothUnion", "Torus",
+    "Translate", "Union", "plugin", "scalar_plugin",
 ]

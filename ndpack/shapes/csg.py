@@ -18,6 +18,10 @@ erode (r < 0)   the child is exact inside               never
 shell           never                                   never
 smooth union    never (a bound of the filleted shape)   never
 ==============  ======================================  =====================================
+
+Each node's ``_kernel`` writes the same formula as its ``_distance`` as a small generated kernel
+function (see :mod:`ndpack.kernels.program`) that calls its children's kernels; transforms keep
+their numbers (offset, centre, matrix, factor) in the parameters, not in the program text.
 """
 
 from __future__ import annotations
@@ -34,6 +38,7 @@ class _Boolean(Oracle):
     """Shared code of n-ary min/max nodes: evaluate all children, keep the active one per point."""
 
     _pick = staticmethod(np.argmin)
+    _combine = "min"  # the same in the kernel language
 
     def __init__(self, *children: Oracle):
         if len(children) < 2:
@@ -59,6 +64,10 @@ class _Boolean(Oracle):
     def _gradient(self, points):
         return self._distance_and_gradient(points)[1]
 
+    def _kernel(self, program):
+        calls = ", ".join(f"{program.shape(child)}(p, prm)" for child in self.children)
+        return program.define(f"def _(p, prm):\n    return {self._combine}({calls})\n")
+
     def __repr__(self):
         return f"{type(self).__name__}({', '.join(map(repr, self.children))})"
 
@@ -67,6 +76,7 @@ class Union(_Boolean):
     """Points inside any child: ``min`` of the distances."""
 
     _pick = staticmethod(np.argmin)
+    _combine = "min"
 
     def __init__(self, *children: Oracle):
         super().__init__(*children)
@@ -81,6 +91,7 @@ class Intersection(_Boolean):
     """Points inside every child: ``max`` of the distances."""
 
     _pick = staticmethod(np.argmax)
+    _combine = "max"
 
     def __init__(self, *children: Oracle):
         super().__init__(*children)
@@ -119,6 +130,9 @@ class Complement(Oracle):
     def _exact_volume(self):
         return np.inf
 
+    def _kernel(self, program):
+        return program.define(f"def _(p, prm):\n    return -{program.shape(self.child)}(p, prm)\n")
+
     def complement(self):
         return self.child
 
@@ -149,6 +163,10 @@ class Difference(Oracle):
 
     def _gradient(self, points):
         return self._distance_and_gradient(points)[1]
+
+    def _kernel(self, program):
+        a, b = program.shape(self.a), program.shape(self.b)
+        return program.define(f"def _(p, prm):\n    return max({a}(p, prm), -{b}(p, prm))\n")
 
     def __repr__(self):
         return f"({self.a!r} - {self.b!r})"
@@ -195,6 +213,17 @@ class Translate(_Transformed):
     def _to_child(self, points):
         return points - self.offset
 
+    def _kernel(self, program):
+        o = program.add_params(self.offset)
+        child = program.shape(self.child)
+        return program.define(
+            "def _(p, prm):\n"
+            "    q = point()\n"
+            "    for i in range(D):\n"
+            f"        q[i] = p[i] - prm[{o} + i]\n"
+            f"    return {child}(q, prm)\n"
+        )
+
     def __repr__(self):
         return f"{self.child!r}.translate({self.offset.tolist()})"
 
@@ -231,6 +260,21 @@ class Rotate(_Transformed):
     def _from_child_gradient(self, gradients):
         return gradients @ self.matrix.T
 
+    def _kernel(self, program):
+        # [center (D), matrix (D x D, row-major)]: q_j = sum_i (p_i - c_i) M_ij + c_j.
+        o = program.add_params([*self.center, *self.matrix.ravel()])
+        child = program.shape(self.child)
+        return program.define(
+            "def _(p, prm):\n"
+            "    q = point()\n"
+            "    for j in range(D):\n"
+            "        s = 0.0\n"
+            "        for i in range(D):\n"
+            f"            s += (p[i] - prm[{o} + i]) * prm[{o} + D + i * D + j]\n"
+            f"        q[j] = s + prm[{o} + j]\n"
+            f"    return {child}(q, prm)\n"
+        )
+
     def __repr__(self):
         return f"{self.child!r}.rotate(...)"
 
@@ -253,6 +297,19 @@ class Scale(_Transformed):
 
     def _to_child(self, points):
         return (points - self.center) / self.factor + self.center
+
+    def _kernel(self, program):
+        # [center (D), factor]: s * f((x - c) / s + c).
+        o = program.add_params([*self.center, self.factor])
+        child = program.shape(self.child)
+        return program.define(
+            "def _(p, prm):\n"
+            f"    factor = prm[{o} + D]\n"
+            "    q = point()\n"
+            "    for i in range(D):\n"
+            f"        q[i] = (p[i] - prm[{o} + i]) / factor + prm[{o} + i]\n"
+            f"    return factor * {child}(q, prm)\n"
+        )
 
     def __repr__(self):
         return f"{self.child!r}.scale_by({self.factor})"
@@ -287,6 +344,11 @@ class Offset(Oracle):
     def _gradient(self, points):
         return self.child._gradient(points)
 
+    def _kernel(self, program):
+        o = program.add_params([self.amount])
+        child = program.shape(self.child)
+        return program.define(f"def _(p, prm):\n    return {child}(p, prm) - prm[{o}]\n")
+
     def __repr__(self):
         return f"{self.child!r}.offset({self.amount})"
 
@@ -312,6 +374,11 @@ class Shell(Oracle):
 
     def _gradient(self, points):
         return self._distance_and_gradient(points)[1]
+
+    def _kernel(self, program):
+        o = program.add_params([self.thickness / 2])
+        child = program.shape(self.child)
+        return program.define(f"def _(p, prm):\n    return abs({child}(p, prm)) - prm[{o}]\n")
 
     def __repr__(self):
         return f"{self.child!r}.shell({self.thickness})"
@@ -357,6 +424,18 @@ class SmoothUnion(Oracle):
 
     def _gradient(self, points):
         return self._distance_and_gradient(points)[1]
+
+    def _kernel(self, program):
+        o = program.add_params([self.blend])
+        a, b = program.shape(self.a), program.shape(self.b)
+        return program.define(
+            "def _(p, prm):\n"
+            f"    da = {a}(p, prm)\n"
+            f"    db = {b}(p, prm)\n"
+            f"    k = prm[{o}]\n"
+            "    h = min(max(0.5 + (db - da) / (2.0 * k), 0.0), 1.0)\n"
+            "    return h * da + (1.0 - h) * db - k * h * (1.0 - h)\n"
+        )
 
     def __repr__(self):
         return f"{self.a!r}.smooth_union({self.b!r}, {self.blend})"

@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from ..errors import ShapeError
+from ..kernels import library
 from ..oracle import Oracle
 
 
@@ -244,6 +245,14 @@ class Polygon(Oracle):
         safe = np.where(on_boundary, 1.0, unsigned)[:, None]
         gradient = np.where(on_boundary[:, None], self._normal[nearest_edge], sign * away / safe)
         return distance, gradient
+
+    def _kernel(self, program):
+        # Ring count and vertex counts first, then the vertices: the program text is the same
+        # for every polygon (the loops read the counts from the parameters).
+        rings = [self.outer, *self.holes]
+        values = [len(rings), *(len(ring) for ring in rings), *np.concatenate(rings).ravel()]
+        offset = program.add_params(values)
+        return program.define(f"def _(p, prm):\n    return {program.use(library.polygon)}(p, prm, {offset})\n")
 
     def __repr__(self) -> str:
         text = f"Polygon({len(self.outer)} vertices"

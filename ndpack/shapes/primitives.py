@@ -147,6 +147,12 @@ def _floats(array: np.ndarray) -> list:
     return np.asarray(array, dtype=np.float64).tolist()
 
 
+def _library_call(program, fn, values) -> str:
+    """Kernel of a shape whose distance is the library function ``fn`` on its ``values``."""
+    offset = program.add_params(values)
+    return program.define(f"def _(p, prm):\n    return {program.use(fn)}(p, prm, {offset})\n")
+
+
 class _Analytic(Oracle):
     """Shared plumbing: the analytic gradient comes together with the distance."""
 
@@ -315,6 +321,9 @@ class RoundedBox(_Analytic):
         d, r = self.dim, self.radius
         return float(sum(e[k] * ball_volume(d - k, 1.0) * r ** (d - k) for k in range(d + 1)))
 
+    def _kernel(self, program):
+        return _library_call(program, library.rounded_box, [*self._center, *self._inner_half, self.radius])
+
     def __repr__(self):
         return (
             f"RoundedBox(lower={_floats(self.lower)}, upper={_floats(self.upper)}, "
@@ -356,6 +365,9 @@ class HalfSpace(_Analytic):
 
     def _exact_volume(self):
         return math.inf
+
+    def _kernel(self, program):
+        return _library_call(program, library.half_space, [*self.normal, self.offset])
 
     def __repr__(self):
         return f"HalfSpace(normal={_floats(self.normal)}, offset={self.offset!r})"
@@ -401,6 +413,9 @@ class Slab(_Analytic):
 
     def _exact_volume(self):
         return math.inf
+
+    def _kernel(self, program):
+        return _library_call(program, library.slab, [*self.normal, self._mid, self._half])
 
     def __repr__(self):
         return f"Slab(normal={_floats(self.normal)}, lower={self.lower!r}, upper={self.upper!r})"
@@ -461,6 +476,10 @@ class Capsule(_Analytic):
     def _exact_volume(self):
         d, r = self.dim, self.radius
         return float(ball_volume(d, r) + ball_volume(d - 1, r) * self.length)
+
+    def _kernel(self, program):
+        values = [*self.a, *self._ab, *self._axis, self._length_sq, self.radius]
+        return _library_call(program, library.capsule, values)
 
     def __repr__(self):
         return f"Capsule(a={_floats(self.a)}, b={_floats(self.b)}, radius={self.radius!r})"
@@ -543,6 +562,9 @@ class Cylinder(_Analytic):
 
     def _exact_volume(self):
         return float(ball_volume(self.dim - 1, self.radius) * self.length)
+
+    def _kernel(self, program):
+        return _library_call(program, library.cylinder, [*self._mid, *self.axis, self.radius, self._half])
 
     def __repr__(self):
         return f"Cylinder(a={_floats(self.a)}, b={_floats(self.b)}, radius={self.radius!r})"
@@ -702,6 +724,11 @@ class ConvexPolytope(_Analytic):
         except QhullError:  # precision trouble with many nearly coplanar vertices
             return None
 
+    def _kernel(self, program):
+        # The count comes first, so the program text does not depend on it (Simplex inherits this).
+        values = [len(self.offsets), *self.normals.ravel(), *self.offsets]
+        return _library_call(program, library.polytope, values)
+
     def __repr__(self):
         if self.normals.size <= 64:
             return (
@@ -808,6 +835,9 @@ class Ellipsoid(_Analytic):
     def _exact_volume(self):
         return float(ball_volume(self.dim) * np.prod(self.radii))
 
+    def _kernel(self, program):
+        return _library_call(program, library.ellipsoid, [*self.center, *self.radii, self._min_radius])
+
     def __repr__(self):
         return f"Ellipsoid(center={_floats(self.center)}, radii={_floats(self.radii)})"
 
@@ -877,6 +907,9 @@ class Torus(_Analytic):
 
     def _exact_volume(self):
         return 2 * math.pi**2 * self.major_radius * self.minor_radius**2
+
+    def _kernel(self, program):
+        return _library_call(program, library.torus, [*self.center, self.major_radius, self.minor_radius])
 
     def __repr__(self):
         return (

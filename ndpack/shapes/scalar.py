@@ -1,0 +1,154 @@
+"""Scalar plug-ins: a distance written once, for one point, that runs on every backend.
+
+Example (a 5-D "gyroid-like" shell, see ``examples/gyroid_5d.py``)::
+
+    import math
+    import ndpack as nd
+
+    @nd.scalar_plugin(dim=5, bounds=[[-1] * 5, [1] * 5], params=[3.0, 0.3])
+    def gyroid(p, params):
+        s = 0.0
+        for i in range(D):                      # D is the dimension
+            s += math.sin(params[0] * p[i]) * math.cos(params[0] * p[(i + 1) % D])
+        return (abs(s) / params[0] - params[1]) / math.sqrt(D)   # scaled to stay 1-Lipschitz
+
+The function takes the point ``p`` and the parameter array ``params`` and is written in the
+kernel language (:mod:`ndpack.kernels.language`): arithmetic, ``math`` functions, indexing, loops,
+``if``, ``min``/``max``/``abs``. ndpack prints it for Numba (CPU and CUDA) and Warp; the NumPy
+backend and :meth:`~ndpack.Oracle.distance` run its Numba CPU form over all points.
+"""
+
+from __future__ import annotations
+
+import ast
+
+import numpy as np
+
+from ..errors import KernelError, OracleError
+from ..kernels.language import Kernel, parse_function
+from .plugin import Function
+
+
+def _with_offset(fn, prefix="user_") -> str:
+    """Source of ``fn(p, params)`` as a library-style kernel ``user_fn(p, prm, o: int)``.
+
+    Every ``params[e]`` becomes ``prm[o + e]``, so the user's parameters can sit anywhere in a
+    program's flat parameter array.
+    """
+    function = parse_function(fn)
+    args = function.args.args
+    if len(args) != 2 or function.args.vararg or function.args.kwarg or function.args.kwonlyargs:
+        raise KernelError(
+            f"a scalar plug-in takes exactly two arguments, (p, params): the point and its "
+            f"parameters; {function.name!r} takes {len(args)}"
+        )
+    params_name = args[1].arg
+    point_name = args[0].arg
+
+    class Rewrite(ast.NodeTransformer):
+        def visit_Subscript(self, node):
+            if isinstance(node.value, ast.Name) and node.value.id == params_name:
+                node.value = ast.Name("prm", ast.Load())
+                node.slice = ast.BinOp(ast.Name("o", ast.Load()), ast.Add(), self.visit(node.slice))
+                return node
+            self.generic_visit(node)
+            return node
+
+        def visit_Name(self, node):
+            if node.id in ("prm", "o") and node.id not in (params_name, point_name):
+                raise KernelError(f"{function.name!r}: the names 'prm' and 'o' are reserved in plug-ins")
+            if node.id == params_name:
+                raise KernelError(
+                    f"{function.name!r}: use the parameters only by index, params[i] (line "
+                    f"{node.lineno - function.lineno + 1})"
+                )
+            return node
+
+    function = Rewrite().visit(function)
+    function.name = prefix + function.name
+    function.args.args = [ast.arg(point_name), ast.arg("prm"), ast.arg("o", ast.Name("int", ast.Load()))]
+    ast.fix_missing_locations(function)
+    return ast.unparse(function)
+
+
+class ScalarFunction(Function):
+    """A user's scalar distance function ``fn(p, params) -> float``, used as a shape on every backend.
+
+    Parameters
+    ----------
+    fn : function
+        Written in the kernel language (see this module); it must be defined with ``def`` in a
+        file or notebook cell, so that its source can be read.
+    dim : int
+        Dimension, at least 1; ``D`` inside ``fn``.
+    bounds : (2, dim) array_like
+        A finite box enclosing the shape.
+    params : sequence of float
+        The values ``fn`` reads as ``params[i]``.
+    exact_inside, exact_outside, name :
+        As for :class:`~ndpack.Function`.
+
+    Raises
+    ------
+    KernelError
+        If ``fn`` uses something outside the kernel language; the message names the line.
+    """
+
+    def __init__(self, fn, dim, bounds, params=(), exact_inside=False, exact_outside=False, name=None):
+        if not callable(fn):
+            raise TypeError(f"fn must be a function (p, params) -> float, got {type(fn).__name__}")
+        try:
+            values = np.asarray(params, dtype=np.float64).ravel()
+        except (TypeError, ValueError):
+            raise OracleError(f"params must be a sequence of numbers, got {params!r}") from None
+        if not np.all(np.isfinite(values)):
+            raise OracleError(f"params must be finite, got {values.tolist()}")
+        self.params = values
+        self.kernel = Kernel(_with_offset(fn))
+        self.scalar_fn = fn
+        super().__init__(
+            self._evaluate, dim, bounds, exact_inside=exact_inside, exact_outside=exact_outside,
+            name=name or fn.__name__,
+        )
+        self.__doc__ = fn.__doc__ or type(self).__doc__
+
+    def _evaluate(self, points):
+        """(n,) distances at (n, dim) points, by the Numba CPU form of the kernel."""
+        from ..backends.base import compiled_program
+        from ..kernels.compile import numba_evaluator
+
+        program, parameters = compiled_program(self)
+        evaluate = self.__dict__.get("_evaluator")
+        if evaluate is None:
+            evaluate = self.__dict__["_evaluator"] = numba_evaluator(program)
+        return evaluate(points, parameters)
+
+    def _kernel(self, program):
+        offset = program.add_params(self.params)
+        name = program.add_kernel(self.kernel)
+        return program.define(f"def _(p, prm):\n    return {name}(p, prm, {offset})\n")
+
+    def __repr__(self):
+        return f"ScalarFunction({self.name!r}, dim={self.dim})"
+
+
+def scalar_plugin(dim, bounds=None, params=(), **flags):
+    """Decorator that turns a scalar distance function into a :class:`ScalarFunction`.
+
+    Examples
+    --------
+    >>> @scalar_plugin(dim=2, bounds=[[-1, -1], [1, 1]], params=[1.0])
+    ... def disc(p, params):
+    ...     return math.sqrt(p[0] * p[0] + p[1] * p[1]) - params[0]
+    """
+    if callable(dim):
+        raise TypeError("scalar_plugin needs its arguments: @ndpack.scalar_plugin(dim=..., bounds=...)")
+    if bounds is None:
+        from ..errors import BoundsError
+
+        raise BoundsError(f"scalar_plugin needs bounds: a (2, {dim}) box [lower corner, upper corner]")
+
+    def wrap(fn) -> ScalarFunction:
+        return ScalarFunction(fn, dim, bounds, params=params, **flags)
+
+    return wrap
