@@ -39,7 +39,8 @@ def _parser() -> argparse.ArgumentParser:
     pack.add_argument("--iterations", type=int, default=50, help="prototype steps (default 50)")
     pack.add_argument("--batch", type=int, default=1, help="spheres per round (default 1)")
     pack.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    pack.add_argument("--backend", help="backend name (default: $NDPACK_BACKEND or the fastest)")
+    pack.add_argument("--backend", help="numpy, numba, numba-cuda or warp (default: $NDPACK_BACKEND or the fastest)")
+    pack.add_argument("--device", help="cpu or cuda:N, for warp and numba-cuda")
     pack.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     return parser
 
@@ -64,6 +65,7 @@ def _pack(args) -> int:
         batch=args.batch,
         seed=args.seed,
         backend=args.backend,
+        device=args.device,
         progress=not args.quiet and sys.stderr.isatty(),
     )
     elapsed = time.perf_counter() - started

@@ -64,8 +64,11 @@ class NumbaCudaBackend(Backend):
     name = "numba-cuda"
 
     def __init__(self, device: int = 0):
+        import numba
         from numba import cuda
 
+        # Small launches (a few touched prototypes) are expected; their occupancy warning is noise.
+        numba.config.CUDA_LOW_OCCUPANCY_WARNINGS = 0
         if not cuda.is_available():
             raise BackendError(
                 "numba-cuda found no usable CUDA GPU (driver or device missing); set "
