@@ -169,11 +169,13 @@ class WarpBackend(Backend):
         args = [self._points(module, box_lower), self._points(module, box_upper), self._array(reach, module.F),
                 d_centers, d_radii]
         counts = self.wp.empty(count, dtype=self.wp.int32, device=self.device)
-        self.wp.launch(module.near_count, dim=count, device=self.device, inputs=[*args, counts])
+        # First pass counts (into a one-column scratch table), second fills a table that fits.
+        scratch = self.wp.empty((count, 1), dtype=self.wp.int32, device=self.device)
+        self.wp.launch(module.near_all, dim=count, device=self.device, inputs=[*args, counts, scratch])
         width = int(counts.numpy().max())
         out = self._array(np.full((count, max(width, 1)), len(centers)), self.wp.int32)
         if width:
-            self.wp.launch(module.near_fill, dim=count, device=self.device, inputs=[*args, out])
+            self.wp.launch(module.near_all, dim=count, device=self.device, inputs=[*args, counts, out])
         return out.numpy()[:, :width].astype(np.int64)
 
     def touched(self, points, clearance, new_centers, new_radii):

@@ -99,27 +99,19 @@ def box_gap(b: int, s: int, lower: wp.array(dtype=VecD), upper: wp.array(dtype=V
 
 
 @wp.kernel
-def near_count(lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD), reach: wp.array(dtype=F),
-               centers: wp.array(dtype=VecD), radii: wp.array(dtype=F), counts: wp.array(dtype=wp.int32)):
+def near_all(lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD), reach: wp.array(dtype=F),
+             centers: wp.array(dtype=VecD), radii: wp.array(dtype=F), counts: wp.array(dtype=wp.int32),
+             out: wp.array2d(dtype=wp.int32)):
+    """How many spheres come within reach of box ``b``; the first ``out.shape[1]`` of them in ``out``."""
     b = wp.tid()
     bound = near_bound(b, lower, upper, reach, centers, radii)
     found = int(0)
     for s in range(radii.shape[0]):
         if box_gap(b, s, lower, upper, centers, radii) <= bound:
+            if found < out.shape[1]:
+                out[b, found] = s
             found += 1
     counts[b] = found
-
-
-@wp.kernel
-def near_fill(lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD), reach: wp.array(dtype=F),
-              centers: wp.array(dtype=VecD), radii: wp.array(dtype=F), out: wp.array2d(dtype=wp.int32)):
-    b = wp.tid()
-    bound = near_bound(b, lower, upper, reach, centers, radii)
-    found = int(0)
-    for s in range(radii.shape[0]):
-        if box_gap(b, s, lower, upper, centers, radii) <= bound:
-            out[b, found] = s
-            found += 1
 
 
 @wp.kernel
