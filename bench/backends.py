@@ -48,9 +48,9 @@ def versions() -> dict:
         from numba import cuda
 
         if cuda.is_available():
-            found["gpu"] = cuda.get_current_device().name.decode() if isinstance(
-                cuda.get_current_device().name, bytes) else str(cuda.get_current_device().name)
-    except Exception:  # noqa: BLE001
+            name = cuda.get_current_device().name
+            found["gpu"] = name.decode() if isinstance(name, bytes) else str(name)
+    except Exception:  # noqa: BLE001 - no GPU is a fact to record, not a failure
         pass
     return found
 

@@ -81,14 +81,7 @@ class NumbaBackend(Backend):
         program, params = compiled_program(shape)
         if id(program) in self._namespaces:
             return self._namespaces[id(program)][1], params
-
-        def jit(namespace, names):
-            namespace["prange"] = self.numba.prange
-            _jit(namespace, names)
-
-        namespace = numba_namespace(
-            program, "cpu", KERNELS + ENTRIES, {"H": FD_STEP * shape.scale}, jit
-        )
+        namespace = numba_namespace(program, "cpu", KERNELS + ENTRIES, {"H": FD_STEP * shape.scale}, _jit)
         self._namespaces[id(program)] = (program, namespace)
         return namespace, params
 
@@ -125,7 +118,7 @@ class NumbaBackend(Backend):
         return out_points, out_clearance
 
     def near_spheres(self, box_lower, box_upper, reach, centers, radii):
-        namespace = _geometry(len(box_lower[0]) if len(box_lower) else 1)
+        namespace = _geometry(box_lower.shape[1])
         count = len(box_lower)
         if len(centers) == 0 or count == 0:
             return np.zeros((count, 0), dtype=np.int64)
@@ -152,11 +145,9 @@ def _geometry(dim):
     if dim in _geometry_cache:
         return _geometry_cache[dim]
     from ..kernels.compile import numba_namespace
-    from ..kernels.program import Program
+    from ..kernels.program import shape_free
 
-    program = Program(dim)
-    program.define("def _(p, prm):\n    return 0.0\n")
-    _geometry_cache[dim] = numba_namespace(program, "cpu", KERNELS + ENTRIES, {"H": 1.0}, _jit)
+    _geometry_cache[dim] = numba_namespace(shape_free(dim), "cpu", KERNELS + ENTRIES, {"H": 1.0}, _jit)
     return _geometry_cache[dim]
 
 

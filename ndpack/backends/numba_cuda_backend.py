@@ -108,12 +108,10 @@ class NumbaCudaBackend(Backend):
     def _geometry(self, dim):
         """The shape-free kernels (near_spheres, touched) for dimension ``dim``."""
         from ..kernels.compile import numba_namespace
-        from ..kernels.program import Program
+        from ..kernels.program import shape_free
 
         if dim not in self._geometries:
-            program = Program(dim)
-            program.define("def _(p, prm):\n    return 0.0\n")
-            self._geometries[dim] = numba_namespace(program, "cuda", KERNELS + ENTRIES, {"H": 1.0}, self._jit)
+            self._geometries[dim] = numba_namespace(shape_free(dim), "cuda", KERNELS + ENTRIES, {"H": 1.0}, self._jit)
         return self._geometries[dim]
 
     def _launch(self, kernel, count, *args):

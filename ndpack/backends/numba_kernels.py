@@ -98,13 +98,14 @@ def near_one(b, lower, upper, reach, centers, radii, out, width):
     half2 = 0.0
     for k in range(D):
         half2 += 0.25 * (upper[b, k] - lower[b, k]) ** 2
+    half = math.sqrt(half2)
     bound = reach[b]
     for s in range(radii.shape[0]):  # a tighter reach from the box centre's clearance
         length2 = 0.0
         for k in range(D):
             t = 0.5 * (lower[b, k] + upper[b, k]) - centers[s, k]
             length2 += t * t
-        bound = min(bound, math.sqrt(length2) - radii[s] + math.sqrt(half2))
+        bound = min(bound, math.sqrt(length2) - radii[s] + half)
     found = 0
     for s in range(radii.shape[0]):
         outside2 = 0.0

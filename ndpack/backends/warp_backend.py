@@ -53,7 +53,7 @@ class WarpBackend(Backend):
             self.device = wp.get_device(device)
         except (ValueError, RuntimeError) as error:
             raise BackendError(f"Warp cannot use device {device!r} ({error}); try 'cpu' or 'cuda:0'") from None
-        if self.device.is_cpu and not _cpu_compiler_available(wp):
+        if self.device.is_cpu and not wp.is_cpu_available():
             raise BackendError("Warp's CPU compiler is not available here; use device='cuda:0' or backend='numba'")
         self.wp = wp
         self.precision = precision
@@ -79,25 +79,22 @@ class WarpBackend(Backend):
         return self._modules[key][1:]
 
     def _geometry(self, dim):
-        from ..kernels.program import Program
+        """The module of the shape-free kernels (near_spheres, touched) for dimension ``dim``."""
+        from ..kernels.compile import warp_module
+        from ..kernels.program import shape_free
 
-        if dim not in self._modules:
-            program = Program(dim)
-            program.define("def _(p, prm):\n    return 0.0\n")
-            from ..kernels.program import ENTRY, Kernel
-
-            program.kernels[ENTRY] = Kernel(f"def {ENTRY}(p, prm):\n    return k0(p, prm)\n", program.kernels)
-            from ..kernels.compile import warp_module
-
-            module = warp_module(program, self.precision, KERNELS)
+        key = ("shape-free", dim)
+        if key not in self._modules:
+            module = warp_module(shape_free(dim), self.precision, KERNELS)
             self.wp.load_module(module, device=self.device)
-            self._modules[dim] = (program, module)
-        return self._modules[dim][1]
+            self._modules[key] = (None, module)
+        return self._modules[key][1]
 
     # ------------------------------------------------------------------ arrays
     def _array(self, host, dtype):
-        return self.wp.array(np.ascontiguousarray(host, dtype=_numpy_type(dtype, self.float)), dtype=dtype,
-                             device=self.device)
+        """A device copy of ``host`` as Warp ``dtype`` (int32 tables, else the float type)."""
+        values = np.ascontiguousarray(host, dtype=np.int32 if dtype is self.wp.int32 else self.float)
+        return self.wp.array(values, dtype=dtype, device=self.device)
 
     def _points(self, module, host):
         return self._array(host, module.VecD)
@@ -190,15 +187,6 @@ class WarpBackend(Backend):
         return out.numpy().astype(bool)
 
 
-def _numpy_type(dtype, float_type):
-    """The NumPy dtype that holds a Warp array of ``dtype`` (points use the float type)."""
-    import warp as wp
-
-    if dtype in (wp.int32,):
-        return np.int32
-    return float_type
-
-
 def _quiet(wp):
     """Keep Warp's start-up banner and per-module messages out of the user's output."""
     if hasattr(wp.config, "quiet"):
@@ -207,13 +195,6 @@ def _quiet(wp):
         from warp._src.logger import LOG_WARNING  # Warp >= 1.10 replaced quiet with log levels
 
         wp.config.log_level = max(wp.config.log_level, LOG_WARNING)
-
-
-def _cpu_compiler_available(wp) -> bool:
-    try:
-        return bool(wp.context.runtime.llvm) if hasattr(wp.context.runtime, "llvm") else True
-    except Exception:  # noqa: BLE001 - any failure to ask means we cannot tell; assume it works
-        return True
 
 
 def _f64(array):

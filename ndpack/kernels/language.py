@@ -222,6 +222,15 @@ class _Checker(ast.NodeVisitor):
 
     # ---------------------------------------------------------------- expressions
     def expr(self, node) -> str:
+        """The type of an expression, also kept on the node (``node.kind``) for the printers.
+
+        The last pass of :meth:`run` sees the final types of every name, so what stays on the
+        nodes is final.
+        """
+        node.kind = self._expr(node)
+        return node.kind
+
+    def _expr(self, node) -> str:
         if isinstance(node, ast.Constant):
             value = node.value
             if isinstance(value, bool):
@@ -353,30 +362,10 @@ class _Printer(ast.NodeTransformer):
         self.types = types
         self.float_name = float_name  # "float64" or "float32"
 
-    # Type of an already-checked expression, recomputed on the original node.
-    def kind(self, node) -> str:
-        if isinstance(node, ast.Constant):
-            return BOOL if isinstance(node.value, bool) else INT if isinstance(node.value, int) else FLOAT
-        if isinstance(node, ast.Name):
-            return INT if node.id == "D" else self.types.get(node.id, FLOAT)
-        if isinstance(node, ast.BinOp):
-            kinds = {self.kind(node.left), self.kind(node.right)}
-            return FLOAT if isinstance(node.op, ast.Div) or FLOAT in kinds else INT
-        if isinstance(node, ast.UnaryOp):
-            return BOOL if isinstance(node.op, ast.Not) else self.kind(node.operand)
-        if isinstance(node, (ast.BoolOp, ast.Compare)):
-            return BOOL
-        if isinstance(node, ast.IfExp):
-            return FLOAT if FLOAT in {self.kind(node.body), self.kind(node.orelse)} else INT
-        if isinstance(node, ast.Call):
-            name = getattr(node.func, "id", None)
-            if name in ("min", "max", "abs"):
-                return FLOAT if FLOAT in {self.kind(a) for a in node.args} else INT
-            if name == "int":
-                return INT
-            if name == "point":
-                return POINT
-        return FLOAT
+    @staticmethod
+    def kind(node) -> str:
+        """The type the checker found for an expression of the original function."""
+        return node.kind
 
     @property
     def warp(self) -> bool:

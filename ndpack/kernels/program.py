@@ -104,6 +104,13 @@ class Program:
         return np.array(self.params or [0.0], dtype=dtype)
 
 
+def shape_free(dim: int) -> Program:
+    """A program whose ``sd`` is 0: what the shape-free kernels (near_spheres, touched) compile with."""
+    program = Program(dim)
+    program.kernels[ENTRY] = Kernel(f"def {ENTRY}(p, prm):\n    return 0.0\n")
+    return program
+
+
 def build(shape) -> Program:
     """The kernel program of ``shape``, whose distance function is ``program.entry``.
 
