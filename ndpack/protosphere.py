@@ -163,11 +163,14 @@ class _ProtoSphere:
             )
         for name in ("cell_lower", "cell_upper", "reach", "points", "clearance"):
             setattr(self, name, getattr(self, name)[alive])
-        self.points, self.clearance = self.backend.converge(
+        points, clearance = self.backend.converge(
             self.shape, self.points, self.cell_lower, self.cell_upper,
             self.centers[:0], self.radii[:0], no_spheres[alive], self.steps,
         )
-        self.polished = np.zeros(len(self.points), dtype=bool)
+        del self.points, self.clearance  # from here on they live in the store, maybe on a GPU
+        self.prototypes = self.backend.prototypes(
+            self.shape, self.cell_lower, self.cell_upper, self.reach, points, clearance
+        )
 
     def _candidate_starts(self, first, ids=None, tries=None):
         """(k + tries, n, d): the ``first`` (k, n, d) points and random points of each cell."""
@@ -189,83 +192,62 @@ class _ProtoSphere:
         rows = np.arange(count)
         return starts[best, rows], clearance[best, rows]
 
-    def _near_spheres(self, ids):
-        """The inserted spheres and, per prototype ``ids``, those that can be its nearest."""
-        centers, radii = self.centers[: self.count], self.radii[: self.count]
-        lower, upper = self.cell_lower[ids], self.cell_upper[ids]
-        neighbours = self.backend.near_spheres(lower, upper, self.reach[ids], centers, radii)
-        return centers, radii, lower, upper, neighbours
+    @property
+    def spheres(self):
+        """The inserted spheres: centres (m, d) and radii (m,)."""
+        return self.centers[: self.count], self.radii[: self.count]
 
-    def reconverge(self, ids, new_centers=None, new_radii=None, tries=None):
+    def reconverge(self, ids, points=None, new_centers=None, new_radii=None, tries=None):
         """Restart the prototypes ``ids`` at their best start and let them converge again.
 
-        The starts are the current point, that point pushed radially just outside the new sphere
-        it fell into (the new gaps lie along that sphere), and random points of the cell.
+        The starts are the current point, that point (``points`` (k, d)) pushed radially just
+        outside the new sphere it fell into (the new gaps lie along that sphere), and random
+        points of the cell.
         """
-        centers, radii, lower, upper, neighbours = self._near_spheres(ids)
-        first = [self.points[ids]]
+        first = np.empty((0, len(ids), self.dim))
         if new_centers is not None:
-            offsets = first[0][:, None, :] - new_centers  # (n, k, d)
+            offsets = points[:, None, :] - new_centers  # (n, k, d)
             lengths = np.linalg.norm(offsets, axis=2)
             nearest = np.argmin(lengths - new_radii, axis=1)
             rows = np.arange(len(ids))
             direction = offsets[rows, nearest] / np.maximum(lengths[rows, nearest], 1e-300)[:, None]
             pushed = new_centers[nearest] + direction * (PUSH_OUT * new_radii[nearest])[:, None]
-            first.append(np.clip(pushed, lower, upper))
-        starts = self._candidate_starts(np.stack(first), ids, tries)
-        starts, _ = self._best_start(starts, neighbours)
-        points, clearance = self.backend.converge(
-            self.shape, starts, lower, upper, centers, radii, neighbours, self.steps
-        )
-        self.points[ids] = points
-        self.clearance[ids] = clearance
-        self.polished[ids] = False
+            first = np.clip(pushed, self.cell_lower[ids], self.cell_upper[ids])[None]
+        starts = self._candidate_starts(first, ids, tries)
+        self.prototypes.move(ids, *self.spheres, self.steps, starts=starts if len(starts) else None)
 
     def revive(self):
         """Restart the dead prototypes (no free start found) with fresh random points; how many live."""
-        dead = np.flatnonzero(self.clearance <= self.margin)
+        dead, _ = self.prototypes.select(high=self.margin)
         if len(dead) == 0 or self.count == 0:
             return 0
         for start in range(0, len(dead), REVIVE_CHUNK):  # bounded memory for any grid
             self.reconverge(dead[start : start + REVIVE_CHUNK], tries=REVIVE_TRIES)
-        return int(np.count_nonzero(self.clearance[dead] > self.margin))
+        return int(np.count_nonzero(self.prototypes.gather(dead)[1] > self.margin))
 
-    def polish_leaders(self, batch):
-        """Polish every unpolished prototype within ``POLISH_WINDOW`` of the ``batch``-th best.
+    def leaders(self, take):
+        """The ``take`` largest clearances after polishing, largest first: ids (k,), clearances
+        (k,) and points (k, d).
 
-        Clearances are attained values, so polishing only raises them: once the leaders are all
-        polished, the largest clearance is the best Voronoi node to the polish accuracy.
+        Every unpolished prototype within ``POLISH_WINDOW`` of the ``take``-th best is polished
+        first. Clearances are attained values, so polishing only raises them: once the leaders are
+        all polished, the largest clearance is the best Voronoi node to the polish accuracy.
         """
-        take = min(batch, len(self.clearance))
         while True:
-            kth_best = np.partition(self.clearance, len(self.clearance) - take)[len(self.clearance) - take]
-            ids = np.flatnonzero(~self.polished & (self.clearance >= (1 - POLISH_WINDOW) * kth_best))
-            if len(ids) == 0 or kth_best <= 0:
-                return
-            centers, radii, lower, upper, neighbours = self._near_spheres(ids)
-            points, clearance = self.backend.converge(
-                self.shape, self.points[ids], lower, upper, centers, radii, neighbours, self.polish_steps
-            )
-            improved = clearance > self.clearance[ids]
-            self.points[ids[improved]] = points[improved]
-            self.clearance[ids[improved]] = clearance[improved]
-            self.polished[ids] = True
+            ids, clearance, points, unpolished = self.prototypes.leaders(take, POLISH_WINDOW)
+            if len(unpolished) == 0:
+                return ids, clearance, points
+            self.prototypes.move(unpolished, *self.spheres, self.polish_steps, polish=True)
 
     # ------------------------------------------------------------------ spheres
     def choose(self, batch, min_radius, room):
         """Up to ``batch`` mutually disjoint candidates, largest first: ((k, d), (k,))."""
-        take = min(batch, room, len(self.clearance))
-        if take == 1:
-            order = np.array([int(np.argmax(self.clearance))])
-        else:
-            top = np.argpartition(-self.clearance, take - 1)[:take]
-            order = top[np.argsort(-self.clearance[top])]
-        radii = self.clearance[order] - self.margin
+        _, clearance, centers = self.leaders(min(batch, room))
+        radii = clearance - self.margin
         large_enough = radii >= max(min_radius, self.margin)
-        order, radii = order[large_enough], radii[large_enough]
-        centers = self.points[order]
+        centers, radii = centers[large_enough], radii[large_enough]
         chosen = []
-        for i in range(len(order)):
+        for i in range(len(radii)):
             # Same-round candidates know nothing of each other: keep those clear of the ones kept.
             if all(np.linalg.norm(centers[i] - centers[j]) >= radii[i] + radii[j] + self.margin for j in chosen):
                 chosen.append(i)
@@ -359,7 +341,7 @@ def pack(
             f"the volume of {shape!r} came out as {volume.value:g}: the shape is too thin for a "
             "Monte Carlo estimate over its bounds; tighten the bounds or give the shape an exact volume"
         )
-    medial_axis, medial_radii = state.points.copy(), state.clearance.copy()
+    medial_axis, medial_radii = state.prototypes.all()
     times, totals, fills = [], [], []
     covered = 0.0
     stop_reason = "count"
@@ -376,19 +358,17 @@ def pack(
             if time_budget is not None and time.perf_counter() - started >= time_budget:
                 stop_reason = "time"
                 break
-            state.polish_leaders(int(batch))
             centers, radii = state.choose(int(batch), min_radius, int(n) - state.count)
             if len(radii) == 0 and state.revive():
-                state.polish_leaders(int(batch))
                 centers, radii = state.choose(int(batch), min_radius, int(n) - state.count)
             if len(radii) == 0:
                 stop_reason = "min_radius" if min_radius > 0 else "no_room"
                 break
             state.insert(centers, radii, len(times))
             covered += float(ball_volume(state.dim, radii).sum())
-            touched = np.flatnonzero(backend.touched(state.points, state.clearance, centers, radii))
+            touched, points = state.prototypes.touched(centers, radii)
             if len(touched):
-                state.reconverge(touched, centers, radii)
+                state.reconverge(touched, points, centers, radii)
             times.append(time.perf_counter() - started)
             totals.append(state.count)
             fills.append(covered / volume.value)

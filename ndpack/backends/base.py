@@ -95,6 +95,16 @@ class Backend:
         """(n,) bool: prototypes whose clearance ball meets one of the new spheres (k, d), (k,)."""
         raise NotImplementedError
 
+    def prototypes(self, shape, cell_lower, cell_upper, reach, points, clearance):
+        """The driver's prototype store (:mod:`ndpack.backends.prototypes`), in this backend's memory.
+
+        CPU backends keep it on the host; GPU backends override this to keep it on their device.
+        Arguments as in :class:`~ndpack.backends.prototypes.Prototypes`.
+        """
+        from .prototypes import HostPrototypes
+
+        return HostPrototypes(self, shape, cell_lower, cell_upper, reach, points, clearance)
+
     def __repr__(self) -> str:
         return f"<ndpack backend {self.name!r}>"
 

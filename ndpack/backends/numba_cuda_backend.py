@@ -48,7 +48,72 @@ def touched_all(points, clearance, centers, radii, out):
     if i < points.shape[0]:
         touched_one(i, points, clearance, centers, radii, out)
 '''
-ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all")
+
+# The prototype store's kernels (see ndpack.backends.prototypes.DevicePrototypes): they work on
+# the device-resident prototypes by id, and compact their answers with an atomic counter.
+STORE_ENTRIES = '''
+def append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags):
+    slot = cuda.atomic.add(counter, 0, 1)
+    out_ids[slot] = i
+    out_values[slot] = clearance[i]
+    for k in range(D):
+        out_points[slot, k] = points[i, k]
+    out_flags[slot] = polished[i]
+
+
+def max_all(clearance, out):
+    i = cuda.grid(1)
+    if i < clearance.shape[0]:
+        cuda.atomic.max(out, 0, clearance[i])
+
+
+def select_all(clearance, polished, points, low, high, unpolished, top, relative, counter, out_ids, out_values,
+               out_points, out_flags):
+    i = cuda.grid(1)
+    if i < clearance.shape[0]:
+        c = clearance[i]
+        lo = low
+        if relative >= 0.0 and top[0] > 0.0:
+            lo = max(lo, top[0] * (1.0 - relative))
+        if c >= lo and c <= high and (unpolished == 0 or polished[i] == 0):
+            append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
+
+
+def touched_select(points, clearance, polished, centers, radii, counter, out_ids, out_values, out_points,
+                   out_flags):
+    i = cuda.grid(1)
+    if i < points.shape[0]:
+        if touches(i, points, clearance, centers, radii):
+            append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
+
+
+def gather_ids(ids, points, clearance, out_points, out_clearance):
+    b = cuda.grid(1)
+    if b < ids.shape[0]:
+        i = ids[b]
+        for k in range(D):
+            out_points[b, k] = points[i, k]
+        out_clearance[b] = clearance[i]
+
+
+def near_ids(ids, lower, upper, reach, centers, radii, width, out):
+    b = cuda.grid(1)
+    if b < ids.shape[0]:
+        found = near_row(ids[b], b, lower, upper, reach, centers, radii, out, out.shape[1])
+        for j in range(found, out.shape[1]):
+            out[b, j] = radii.shape[0]
+        cuda.atomic.max(width, 0, found)
+
+
+def move_ids(ids, starts, tries, points, clearance, polished, lower, upper, prm, centers, radii, nbr, steps,
+             h, polish):
+    b = cuda.grid(1)
+    if b < ids.shape[0]:
+        move_one(b, ids, starts, tries, points, clearance, polished, lower, upper, prm, centers, radii, nbr,
+                 steps, polish)
+'''
+ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
+               "select_all", "max_all", "touched_select", "gather_ids", "near_ids", "move_ids")
 THREADS_PER_BLOCK = 128
 
 
@@ -100,7 +165,7 @@ class NumbaCudaBackend(Backend):
         program, params = compiled_program(shape)
         if id(program) not in self._namespaces:
             namespace = numba_namespace(
-                program, "cuda", KERNELS + ENTRIES, {"H": FD_STEP * shape.scale}, self._jit
+                program, "cuda", KERNELS + ENTRIES + STORE_ENTRIES, {"H": FD_STEP * shape.scale}, self._jit
             )
             self._namespaces[id(program)] = (program, namespace, self.cuda.to_device(params))
         return self._namespaces[id(program)][1:]
@@ -120,10 +185,7 @@ class NumbaCudaBackend(Backend):
             kernel[blocks, THREADS_PER_BLOCK](*args)
 
     def _spheres_and_table(self, centers, radii, neighbours):
-        dim = centers.shape[1]
-        if len(centers) == 0:  # one sphere at infinity keeps every array non-empty
-            centers, radii = np.full((1, dim), 1e300), np.zeros(1)
-        d_centers, d_radii = self._spheres.sync(np.asarray(centers, np.float64), np.asarray(radii, np.float64))
+        d_centers, d_radii = self._device_spheres(centers, radii)
         table = neighbours if neighbours.shape[1] else np.full((len(neighbours), 1), len(centers))
         return d_centers, d_radii, self.cuda.to_device(np.ascontiguousarray(table, dtype=np.int64))
 
@@ -169,6 +231,18 @@ class NumbaCudaBackend(Backend):
             self._launch(namespace["near_fill"], count, *args, out)
         return out.copy_to_host()[:, :width]
 
+    def prototypes(self, shape, cell_lower, cell_upper, reach, points, clearance):
+        """The prototypes on the GPU (see :class:`~ndpack.backends.prototypes.DevicePrototypes`)."""
+        from .prototypes import DevicePrototypes
+
+        return DevicePrototypes(_CudaDevice(self, shape), cell_lower, cell_upper, reach, points, clearance)
+
+    def _device_spheres(self, centers, radii):
+        """Device copies of the spheres; one at infinity stands in for none, so no array is empty."""
+        if len(centers) == 0:
+            centers, radii = np.full((1, centers.shape[1]), 1e30), np.zeros(1)
+        return self._spheres.sync(_f64(centers), _f64(radii))
+
     def touched(self, points, clearance, new_centers, new_radii):
         namespace = self._geometry(points.shape[1])
         to = self.cuda.to_device
@@ -176,6 +250,48 @@ class NumbaCudaBackend(Backend):
         self._launch(namespace["touched_all"], len(points), to(_f64(points)), to(_f64(clearance)),
                      to(_f64(new_centers)), to(_f64(new_radii)), out)
         return out.copy_to_host()
+
+
+class _CudaDevice:
+    """The device adapter of :class:`~ndpack.backends.prototypes.DevicePrototypes` for one shape."""
+
+    DTYPES = {"float": np.float64, "point": np.float64, "index": np.int64}
+
+    def __init__(self, backend, shape):
+        self.backend, self.cuda = backend, backend.cuda
+        self.namespace, self.params = backend._kernels(shape)
+        self.h = 0.0  # the step is compiled in (H); the kernels take it for Warp's sake
+        self.stream = self.cuda.default_stream()  # where the kernels run, so copies queue behind them
+        self._staging = {}  # (slot, dtype, row shape) -> pinned host array that fetch copies into
+
+    def upload(self, host, kind):
+        return self.cuda.to_device(np.ascontiguousarray(host, dtype=self.DTYPES[kind]))
+
+    def empty(self, shape, kind):
+        if kind == "point":
+            shape = (shape, self.namespace["D"])
+        return self.cuda.device_array(shape, dtype=self.DTYPES[kind])
+
+    def fill(self, array, value):
+        array.copy_to_device(np.full(array.shape, value, dtype=array.dtype), stream=self.stream)
+
+    def fetch(self, *pairs):
+        staged = []
+        for slot, (array, count) in enumerate(pairs):
+            key = (slot, array.dtype, array.shape[1:])
+            if key not in self._staging or len(self._staging[key]) < count:
+                self._staging[key] = self.cuda.pinned_array((max(count, 256), *array.shape[1:]), dtype=array.dtype)
+            if count:  # pinned destination: asynchronous, one wait for all
+                array[:count].copy_to_host(self._staging[key][:count], stream=self.stream)
+            staged.append((self._staging[key], count))
+        self.stream.synchronize()
+        return [buffer[:count].copy() for buffer, count in staged]
+
+    def launch(self, name, threads, *args):
+        self.backend._launch(self.namespace[name], threads, *args)
+
+    def spheres(self, centers, radii):
+        return self.backend._device_spheres(centers, radii)
 
 
 def _write_rows(centers, radii, start, host_centers, host_radii):

@@ -13,12 +13,8 @@ Array arguments: ``points``, ``lower``, ``upper``, ``centers`` (n, D) float64; `
 # ruff: noqa: F821  (D, H, sd and point exist where this text runs)
 
 
-def free_space(x, g, prm, centers, radii, nbr, row):
-    """Clearance of ``x`` and, in ``g``, the direction away from its nearest obstacle.
-
-    Away from the shape's boundary it is ``-grad sd`` by central differences of step ``H``
-    (the reference uses the analytic gradient); away from a sphere, the unit vector from its centre.
-    """
+def nearest_obstacle(x, prm, centers, radii, nbr, row):
+    """Clearance of ``x`` and its nearest sphere (-1 when the shape's boundary is nearest)."""
     clearance = -sd(x, prm)
     nearest = -1
     count = radii.shape[0]
@@ -33,6 +29,16 @@ def free_space(x, g, prm, centers, radii, nbr, row):
             if gap < clearance:
                 clearance = gap
                 nearest = s
+    return clearance, nearest
+
+
+def free_space(x, g, prm, centers, radii, nbr, row):
+    """Clearance of ``x`` and, in ``g``, the direction away from its nearest obstacle.
+
+    Away from the shape's boundary it is ``-grad sd`` by central differences of step ``H``
+    (the reference uses the analytic gradient); away from a sphere, the unit vector from its centre.
+    """
+    clearance, nearest = nearest_obstacle(x, prm, centers, radii, nbr, row)
     if nearest < 0:
         for k in range(D):
             xk = x[k]
@@ -69,17 +75,29 @@ def clearance_one(i, points, prm, centers, radii, nbr, out, out_direction):
 
 
 def converge_one(i, points, lower, upper, prm, centers, radii, nbr, steps, out_points, out_clearance):
-    """``p <- p + eps |c| g`` clipped to the cell, keeping the best point seen (as the reference)."""
+    """Converge point ``i`` in its cell (row ``i`` of every table) into the outputs."""
     x = point()
     g = point()
     best = point()
     for k in range(D):
         x[k] = points[i, k]
+    out_clearance[i] = converge_from(x, g, best, i, i, lower, upper, prm, centers, radii, nbr, steps)
+    for k in range(D):
+        out_points[i, k] = best[k]
+
+
+def converge_from(x, g, best, cell, row, lower, upper, prm, centers, radii, nbr, steps):
+    """``p <- p + eps |c| g`` from ``x``, clipped to cell ``cell``, with neighbour row ``row``.
+
+    Leaves the best point seen in ``best`` (as the reference does) and returns its clearance;
+    ``x`` and ``g`` are scratch.
+    """
+    for k in range(D):
         best[k] = x[k]
     best_clearance = -math.inf
     count = steps.shape[0]
     for t in range(count + 1):
-        c = free_space(x, g, prm, centers, radii, nbr, i)
+        c = free_space(x, g, prm, centers, radii, nbr, row)
         if c > best_clearance:
             best_clearance = c
             for k in range(D):
@@ -87,14 +105,45 @@ def converge_one(i, points, lower, upper, prm, centers, radii, nbr, steps, out_p
         if t < count:
             step = steps[t] * abs(c)
             for k in range(D):
-                x[k] = min(max(x[k] + step * g[k], lower[i, k]), upper[i, k])
+                x[k] = min(max(x[k] + step * g[k], lower[cell, k]), upper[cell, k])
+    return best_clearance
+
+
+def move_one(b, ids, starts, tries, points, clearance, polished, lower, upper, prm, centers, radii, nbr,
+             steps, polish):
+    """Move prototype ``ids[b]`` in place: from the best of its point and ``starts[:tries, b]``,
+    converge; keep the result (``polish`` 0), or keep it only if better and mark it polished (1)."""
+    i = ids[b]
+    x = point()
+    g = point()
+    best = point()
     for k in range(D):
-        out_points[i, k] = best[k]
-    out_clearance[i] = best_clearance
+        x[k] = points[i, k]
+    if tries > 0:
+        top = nearest_obstacle(x, prm, centers, radii, nbr, b)[0]
+        for t in range(tries):
+            for k in range(D):
+                g[k] = starts[t, b, k]
+            c = nearest_obstacle(g, prm, centers, radii, nbr, b)[0]
+            if c > top:
+                top = c
+                for k in range(D):
+                    x[k] = g[k]
+    c = converge_from(x, g, best, i, b, lower, upper, prm, centers, radii, nbr, steps)
+    if polish == 0 or c > clearance[i]:
+        clearance[i] = c
+        for k in range(D):
+            points[i, k] = best[k]
+    polished[i] = polish
 
 
 def near_one(b, lower, upper, reach, centers, radii, out, width):
     """Spheres whose surface comes within the reach of box ``b``: how many, the first ``width`` in ``out``."""
+    return near_row(b, b, lower, upper, reach, centers, radii, out, width)
+
+
+def near_row(b, row, lower, upper, reach, centers, radii, out, width):
+    """As :func:`near_one` for box ``b``, written to row ``row`` of ``out``."""
     half2 = 0.0
     for k in range(D):
         half2 += 0.25 * (upper[b, k] - lower[b, k]) ** 2
@@ -114,18 +163,22 @@ def near_one(b, lower, upper, reach, centers, radii, out, width):
             outside2 += t * t
         if math.sqrt(outside2) - radii[s] <= bound:
             if found < width:
-                out[b, found] = s
+                out[row, found] = s
             found += 1
     return found
 
 
 def touched_one(i, points, clearance, centers, radii, out):
-    out[i] = False
+    out[i] = touches(i, points, clearance, centers, radii)
+
+
+def touches(i, points, clearance, centers, radii):
+    """Whether prototype ``i``'s clearance ball meets one of the spheres."""
     for s in range(radii.shape[0]):
         length2 = 0.0
         for k in range(D):
             t = points[i, k] - centers[s, k]
             length2 += t * t
         if math.sqrt(length2) - radii[s] < clearance[i]:
-            out[i] = True
-            return
+            return True
+    return False

@@ -117,11 +117,14 @@ class WarpBackend(Backend):
             self._spheres[dim] = DeviceSpheres(empty, write, keep, lambda array, count: array[:count])
         return self._spheres[dim]
 
+    def _device_spheres(self, module, centers, radii):
+        """Device copies of the spheres; one far away stands in for none, so no array is empty."""
+        if len(centers) == 0:
+            centers, radii = np.full((1, module.D), 1e30), np.zeros(1)
+        return self._sphere_mirror(module, module.D).sync(_f64(centers), _f64(radii))
+
     def _spheres_and_table(self, module, centers, radii, neighbours):
-        dim = module.D
-        if len(centers) == 0:  # one sphere far away keeps every array non-empty
-            centers, radii = np.full((1, dim), 1e30), np.zeros(1)
-        d_centers, d_radii = self._sphere_mirror(module, dim).sync(np.asarray(centers, np.float64), np.asarray(radii, np.float64))
+        d_centers, d_radii = self._device_spheres(module, centers, radii)
         table = neighbours if neighbours.shape[1] else np.full((len(neighbours), 1), len(centers))
         return d_centers, d_radii, self._array(table, self.wp.int32)
 
@@ -175,6 +178,12 @@ class WarpBackend(Backend):
             self.wp.launch(module.near_all, dim=count, device=self.device, inputs=[*args, counts, out])
         return out.numpy()[:, :width].astype(np.int64)
 
+    def prototypes(self, shape, cell_lower, cell_upper, reach, points, clearance):
+        """The prototypes on this backend's device (see :class:`~ndpack.backends.prototypes.DevicePrototypes`)."""
+        from .prototypes import DevicePrototypes
+
+        return DevicePrototypes(_WarpDevice(self, shape), cell_lower, cell_upper, reach, points, clearance)
+
     def touched(self, points, clearance, new_centers, new_radii):
         if len(points) == 0:
             return np.zeros(0, dtype=bool)
@@ -185,6 +194,53 @@ class WarpBackend(Backend):
             self._points(module, new_centers), self._array(new_radii, module.F), out,
         ])
         return out.numpy().astype(bool)
+
+
+class _WarpDevice:
+    """The device adapter of :class:`~ndpack.backends.prototypes.DevicePrototypes` for one shape."""
+
+    def __init__(self, backend, shape):
+        self.backend, self.wp, self.where = backend, backend.wp, backend.device
+        self.module, self.params, self.h = backend._module(shape)
+        self.dtypes = {"float": self.module.F, "point": self.module.VecD, "index": self.wp.int32}
+        self._staging = {}  # (slot, dtype) -> pinned host array that fetch copies into
+
+    def upload(self, host, kind):
+        return self.backend._array(host, self.dtypes[kind])
+
+    def empty(self, shape, kind):
+        return self.wp.empty(shape, dtype=self.dtypes[kind], device=self.where)
+
+    def fill(self, array, value):
+        array.fill_(value)
+
+    def fetch(self, *pairs):
+        wp = self.wp
+        if self.where.is_cpu:
+            return [self._host(array[:count].numpy(), array) for array, count in pairs]
+        staged = []
+        for slot, (array, count) in enumerate(pairs):
+            key = (slot, array.dtype)
+            if key not in self._staging or self._staging[key].shape[0] < count:
+                self._staging[key] = wp.empty(max(count, 256), dtype=array.dtype, device="cpu", pinned=True)
+            if count:  # pinned destination: the copies queue behind the kernels, one wait for all
+                wp.copy(self._staging[key], array, count=count)
+            staged.append((self._staging[key], count, array))
+        wp.synchronize_device(self.where)
+        return [self._host(buffer.numpy()[:count], array) for buffer, count, array in staged]
+
+    def _host(self, values, array):
+        """A float64 (or int64) copy of fetched ``values`` of the device ``array``."""
+        if array.dtype is self.module.VecD:
+            return values.astype(np.float64).reshape(-1, self.module.D)
+        return values.astype(np.int64 if array.dtype is self.wp.int32 else np.float64)
+
+    def launch(self, name, threads, *args):
+        if threads:
+            self.wp.launch(getattr(self.module, name), dim=threads, inputs=list(args), device=self.where)
+
+    def spheres(self, centers, radii):
+        return self.backend._device_spheres(self.module, centers, radii)
 
 
 def _quiet(wp):

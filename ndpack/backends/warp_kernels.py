@@ -10,10 +10,9 @@ and ``sd(p, prm)``. Every kernel mirrors a step of the NumPy reference
 
 
 @wp.func
-def free_space(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
-               nbr: wp.array2d(dtype=wp.int32), row: int, h: F):
-    """Clearance of ``x`` and the direction away from its nearest obstacle (``-grad sd`` by
-    central differences of step ``h``, or away from the nearest sphere's centre)."""
+def nearest_obstacle(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
+                     nbr: wp.array2d(dtype=wp.int32), row: int):
+    """Clearance of ``x`` and its nearest sphere (-1 when the shape's boundary is nearest)."""
     clearance = -sd(x, prm)
     nearest = int(-1)
     count = radii.shape[0]
@@ -24,6 +23,15 @@ def free_space(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), r
             if gap < clearance:
                 clearance = gap
                 nearest = s
+    return clearance, nearest
+
+
+@wp.func
+def free_space(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
+               nbr: wp.array2d(dtype=wp.int32), row: int, h: F):
+    """Clearance of ``x`` and the direction away from its nearest obstacle (``-grad sd`` by
+    central differences of step ``h``, or away from the nearest sphere's centre)."""
+    clearance, nearest = nearest_obstacle(x, prm, centers, radii, nbr, row)
     g = VecD()
     if nearest < 0:
         for k in range(D):
@@ -54,25 +62,33 @@ def clearance_all(points: wp.array(dtype=VecD), prm: wp.array(dtype=F), centers:
         out_direction[i] = g
 
 
-@wp.kernel
-def converge_all(points: wp.array(dtype=VecD), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
-                 prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
-                 nbr: wp.array2d(dtype=wp.int32), steps: wp.array(dtype=F), h: F,
-                 out_points: wp.array(dtype=VecD), out_clearance: wp.array(dtype=F)):
-    i = wp.tid()
-    x = points[i]
+@wp.func
+def converge_from(x: VecD, lower: VecD, upper: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD),
+                  radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32), row: int, steps: wp.array(dtype=F),
+                  h: F):
+    """``p <- p + eps |c| g`` from ``x``, clipped to the cell; the best point seen and its clearance."""
     best = x
     best_clearance = F(-1.0e30)
     count = steps.shape[0]
     for t in range(count + 1):
-        c, g = free_space(x, prm, centers, radii, nbr, i, h)
+        c, g = free_space(x, prm, centers, radii, nbr, row, h)
         if c > best_clearance:
             best_clearance = c
             best = x
         if t < count:
             x = x + (steps[t] * wp.abs(c)) * g
             for k in range(D):
-                x[k] = wp.min(wp.max(x[k], lower[i][k]), upper[i][k])
+                x[k] = wp.min(wp.max(x[k], lower[k]), upper[k])
+    return best, best_clearance
+
+
+@wp.kernel
+def converge_all(points: wp.array(dtype=VecD), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
+                 prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
+                 nbr: wp.array2d(dtype=wp.int32), steps: wp.array(dtype=F), h: F,
+                 out_points: wp.array(dtype=VecD), out_clearance: wp.array(dtype=F)):
+    i = wp.tid()
+    best, best_clearance = converge_from(points[i], lower[i], upper[i], prm, centers, radii, nbr, i, steps, h)
     out_points[i] = best
     out_clearance[i] = best_clearance
 
@@ -114,12 +130,120 @@ def near_all(lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD), reach: wp
     counts[b] = found
 
 
-@wp.kernel
-def touched_all(points: wp.array(dtype=VecD), clearance: wp.array(dtype=F), centers: wp.array(dtype=VecD),
-                radii: wp.array(dtype=F), out: wp.array(dtype=wp.int32)):
-    i = wp.tid()
+@wp.func
+def touches(i: int, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F), centers: wp.array(dtype=VecD),
+            radii: wp.array(dtype=F)):
+    """Whether prototype ``i``'s clearance ball meets one of the spheres."""
     hit = int(0)
     for s in range(radii.shape[0]):
         if wp.length(points[i] - centers[s]) - radii[s] < clearance[i]:
             hit = 1
-    out[i] = hit
+    return hit
+
+
+@wp.kernel
+def touched_all(points: wp.array(dtype=VecD), clearance: wp.array(dtype=F), centers: wp.array(dtype=VecD),
+                radii: wp.array(dtype=F), out: wp.array(dtype=wp.int32)):
+    i = wp.tid()
+    out[i] = touches(i, points, clearance, centers, radii)
+
+
+# The prototype store's kernels (see ndpack.backends.prototypes.DevicePrototypes): they work on
+# the device-resident prototypes by id, and compact their answers with an atomic counter.
+
+
+@wp.func
+def append(i: int, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32),
+           counter: wp.array(dtype=wp.int32), out_ids: wp.array(dtype=wp.int32), out_values: wp.array(dtype=F),
+           out_points: wp.array(dtype=VecD), out_flags: wp.array(dtype=wp.int32)):
+    """Append prototype ``i`` to the answer buffers."""
+    slot = wp.atomic_add(counter, 0, 1)
+    out_ids[slot] = i
+    out_values[slot] = clearance[i]
+    out_points[slot] = points[i]
+    out_flags[slot] = polished[i]
+    return slot
+
+
+@wp.kernel
+def max_all(clearance: wp.array(dtype=F), out: wp.array(dtype=F)):
+    wp.atomic_max(out, 0, clearance[wp.tid()])
+
+
+@wp.kernel
+def select_all(clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32), points: wp.array(dtype=VecD),
+               low: F, high: F, unpolished: int, top: wp.array(dtype=F), relative: F,
+               counter: wp.array(dtype=wp.int32), out_ids: wp.array(dtype=wp.int32), out_values: wp.array(dtype=F),
+               out_points: wp.array(dtype=VecD), out_flags: wp.array(dtype=wp.int32)):
+    """Append the prototypes with ``low <= clearance <= high`` (unpolished ones only, if asked);
+    with ``relative >= 0``, ``low`` rises to ``(1 - relative) * top[0]`` where that is positive."""
+    i = wp.tid()
+    c = clearance[i]
+    lo = low
+    if relative >= F(0.0) and top[0] > F(0.0):
+        lo = wp.max(lo, top[0] * (F(1.0) - relative))
+    if c >= lo and c <= high:
+        if unpolished == 0 or polished[i] == 0:
+            append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
+
+
+@wp.kernel
+def touched_select(points: wp.array(dtype=VecD), clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32),
+                   centers: wp.array(dtype=VecD), radii: wp.array(dtype=F), counter: wp.array(dtype=wp.int32),
+                   out_ids: wp.array(dtype=wp.int32), out_values: wp.array(dtype=F),
+                   out_points: wp.array(dtype=VecD), out_flags: wp.array(dtype=wp.int32)):
+    i = wp.tid()
+    if touches(i, points, clearance, centers, radii) != 0:
+        append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
+
+
+@wp.kernel
+def gather_ids(ids: wp.array(dtype=wp.int32), points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
+               out_points: wp.array(dtype=VecD), out_clearance: wp.array(dtype=F)):
+    b = wp.tid()
+    out_points[b] = points[ids[b]]
+    out_clearance[b] = clearance[ids[b]]
+
+
+@wp.kernel
+def near_ids(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
+             reach: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
+             width: wp.array(dtype=wp.int32), out: wp.array2d(dtype=wp.int32)):
+    """Row ``b`` of ``out``: the spheres within reach of the cell of prototype ``ids[b]``, padded."""
+    b = wp.tid()
+    i = ids[b]
+    bound = near_bound(i, lower, upper, reach, centers, radii)
+    found = int(0)
+    for s in range(radii.shape[0]):
+        if box_gap(i, s, lower, upper, centers, radii) <= bound:
+            if found < out.shape[1]:
+                out[b, found] = s
+            found += 1
+    for j in range(found, out.shape[1]):
+        out[b, j] = radii.shape[0]
+    wp.atomic_max(width, 0, found)
+
+
+@wp.kernel
+def move_ids(ids: wp.array(dtype=wp.int32), starts: wp.array2d(dtype=VecD), tries: int, points: wp.array(dtype=VecD),
+             clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD),
+             upper: wp.array(dtype=VecD), prm: wp.array(dtype=F), centers: wp.array(dtype=VecD),
+             radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32), steps: wp.array(dtype=F), h: F, polish: int):
+    """Move prototype ``ids[b]`` in place: from the best of its point and ``starts[:tries, b]``,
+    converge; keep the result (``polish`` 0), or keep it only if better and mark it polished (1)."""
+    b = wp.tid()
+    i = ids[b]
+    x = points[i]
+    if tries > 0:
+        top, nearest = nearest_obstacle(x, prm, centers, radii, nbr, b)
+        for t in range(tries):
+            y = starts[t, b]
+            c, s = nearest_obstacle(y, prm, centers, radii, nbr, b)
+            if c > top:
+                top = c
+                x = y
+    best, best_clearance = converge_from(x, lower[i], upper[i], prm, centers, radii, nbr, b, steps, h)
+    if polish == 0 or best_clearance > clearance[i]:
+        points[i] = best
+        clearance[i] = best_clearance
+    polished[i] = polish

@@ -1,0 +1,293 @@
+"""The driver's prototypes, held where the backend computes: host memory, or a GPU's.
+
+The ProtoSphere driver keeps one prototype per grid cell: a point, its clearance, and whether it
+has been polished. Each round touches only a few of them (the leaders, and those a new sphere
+touched), so the driver speaks to the whole set through :class:`Prototypes`, by ids: it asks
+for the largest clearances, the prototypes a new sphere touched, or for some ids to move, and
+gets back small host arrays. A GPU backend keeps the full set on its device
+(:class:`DevicePrototypes`), so no round copies all prototypes to the host and back; the CPU
+backends use :class:`HostPrototypes`, which calls the backend's array operations.
+
+Ids are int64 prototype indices, ascending unless said otherwise.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: :meth:`DevicePrototypes.leaders` asks for the prototypes within a window (this fraction) below
+#: the largest clearance, widened by ``WIDEN`` until it holds the leaders and those near them, and
+#: narrowed again (not below the polish window) when it held far more.
+FIRST_WINDOW, WIDEN = 0.05, 4.0
+
+
+def top_order(ids: np.ndarray, clearance: np.ndarray, k: int):
+    """The ``k`` largest clearances, largest first and ties by lower id: ((k,), (k,)).
+
+    The tie rule makes every backend choose the same prototype among equal clearances, which
+    symmetric shapes produce.
+    """
+    order = np.lexsort((ids, -clearance))[:k]
+    return ids[order], clearance[order]
+
+
+class Prototypes:
+    """All prototypes of one packing run, with their grid cells.
+
+    Parameters
+    ----------
+    cell_lower, cell_upper : (n, d) float64
+        The box of each prototype's grid cell, which confines it.
+    reach : (n,) float64
+        Upper bound of the clearance of any point in each cell (finds the spheres near it).
+    points : (n, d) float64 and clearance : (n,) float64
+        Starting positions and their clearances.
+
+    The cell arrays stay on the host too (the driver draws random restarts in them); points,
+    clearances and polish flags belong to the subclass.
+    """
+
+    def __init__(self, cell_lower, cell_upper, reach, points, clearance):
+        self.cell_lower, self.cell_upper, self.reach = cell_lower, cell_upper, reach
+        self.dim = cell_lower.shape[1]
+
+    def __len__(self) -> int:
+        return len(self.reach)
+
+    def select(self, low=-np.inf, high=np.inf, unpolished=False):
+        """Ids of the prototypes with ``low <= clearance <= high`` (and not polished, if asked),
+        and their clearances: ((m,) int64, (m,) float64)."""
+        raise NotImplementedError
+
+    def leaders(self, k: int, window: float):
+        """The ``k`` largest clearances (fewer if n < k), largest first, and the unpolished near them.
+
+        Returns
+        -------
+        ids : (k,) int64, clearance : (k,) float64, points : (k, d) float64
+            The leaders, ties in clearance by lower id (:func:`top_order`).
+        unpolished : (m,) int64
+            Ids of the unpolished prototypes with clearance ``>= (1 - window)`` times the k-th
+            largest; empty when that is not positive.
+        """
+        raise NotImplementedError
+
+    def touched(self, new_centers, new_radii):
+        """The prototypes whose clearance ball meets one of the new spheres (k, d), (k,).
+
+        Returns ids (t,) int64 and their points (t, d) float64.
+        """
+        raise NotImplementedError
+
+    def gather(self, ids):
+        """Points (k, d) and clearances (k,) of prototypes ``ids``, on the host."""
+        raise NotImplementedError
+
+    def move(self, ids, centers, radii, steps, starts=None, polish=False):
+        """Converge prototypes ``ids`` among the spheres ``centers`` (m, d), ``radii`` (m,).
+
+        Each starts from the best (largest clearance) of its current point and its ``starts``
+        (t, k, d), if given, and follows the cooling schedule ``steps`` (T,). ``polish=False``: the
+        result replaces the prototype, which is marked unpolished (the spheres changed).
+        ``polish=True``: it replaces it only where the clearance grew, and marks it polished.
+        """
+        raise NotImplementedError
+
+    def all(self):
+        """Every point (n, d) and clearance (n,) on the host: for results, not for rounds."""
+        return self.gather(np.arange(len(self)))
+
+
+class HostPrototypes(Prototypes):
+    """Prototypes in host memory; the heavy work runs through the backend's array operations."""
+
+    def __init__(self, backend, shape, cell_lower, cell_upper, reach, points, clearance):
+        super().__init__(cell_lower, cell_upper, reach, points, clearance)
+        self.backend, self.shape = backend, shape
+        self.points, self.clearance = points, clearance
+        self.polished = np.zeros(len(points), dtype=bool)
+
+    def select(self, low=-np.inf, high=np.inf, unpolished=False):
+        mask = (self.clearance >= low) & (self.clearance <= high)
+        if unpolished:
+            mask &= ~self.polished
+        ids = np.flatnonzero(mask)
+        return ids, self.clearance[ids]
+
+    def leaders(self, k, window):
+        k = min(k, len(self))
+        if k == 1:  # argmax takes the first (lowest id) of equal maxima, as top_order does
+            ids = np.array([int(np.argmax(self.clearance))])
+            clearance = self.clearance[ids]
+        else:
+            kth = np.partition(self.clearance, len(self) - k)[len(self) - k]
+            ids, clearance = top_order(*self.select(low=kth), k)
+        kth = clearance[-1]
+        unpolished = self.select(low=(1 - window) * kth, unpolished=True)[0] if kth > 0 else ids[:0]
+        return ids, clearance, self.points[ids], unpolished
+
+    def gather(self, ids):
+        return self.points[ids], self.clearance[ids]
+
+    def touched(self, new_centers, new_radii):
+        ids = np.flatnonzero(self.backend.touched(self.points, self.clearance, new_centers, new_radii))
+        return ids, self.points[ids]
+
+    def move(self, ids, centers, radii, steps, starts=None, polish=False):
+        backend, shape = self.backend, self.shape
+        lower, upper = self.cell_lower[ids], self.cell_upper[ids]
+        neighbours = backend.near_spheres(lower, upper, self.reach[ids], centers, radii)
+        points = self.points[ids]
+        if starts is not None:
+            candidates = np.concatenate([points[None], starts])  # (t + 1, k, d)
+            tries, count, dim = candidates.shape
+            clearance = backend.clearance(
+                shape, candidates.reshape(-1, dim), centers, radii, np.tile(neighbours, (tries, 1))
+            ).reshape(tries, count)
+            points = candidates[np.argmax(clearance, axis=0), np.arange(count)]
+        points, clearance = backend.converge(shape, points, lower, upper, centers, radii, neighbours, steps)
+        if polish:
+            better = clearance > self.clearance[ids]
+            self.points[ids[better]] = points[better]
+            self.clearance[ids[better]] = clearance[better]
+        else:
+            self.points[ids] = points
+            self.clearance[ids] = clearance
+        self.polished[ids] = polish
+
+
+class DevicePrototypes(Prototypes):
+    """Prototypes in a GPU's memory; each call launches kernels and copies back only its answer.
+
+    A query (select, leaders, touched) runs a kernel that appends its matches (id, clearance,
+    point, polish flag) to answer buffers through an atomic counter; one synchronising copy
+    brings back the counter and a prefix of the buffers, sized from the last answers.
+
+    Parameters
+    ----------
+    device : object
+        The backend's device adapter, with ``upload(host, kind)``, ``empty(shape, kind)``,
+        ``fill(array, value)``, ``fetch(*(array, count))`` (host copies of the first ``count``
+        rows of each array, after one synchronisation), ``launch(kernel_name, threads, *args)``,
+        ``spheres(centers, radii)`` (device copies, never empty), ``params`` (the shape's
+        parameters on the device) and ``h`` (the finite-difference step). Kinds are ``"float"``,
+        ``"point"`` and ``"index"``. The kernels are ``max_all``, ``select_all``,
+        ``touched_select``, ``gather_ids``, ``near_ids`` and ``move_ids`` of the backend's text.
+    Other parameters as in :class:`Prototypes`.
+    """
+
+    #: Neighbour-table columns allocated at first; grown to the widest row seen.
+    FIRST_WIDTH = 8
+    #: Answer rows copied back with the counter, at least; more after larger answers.
+    FIRST_PREFIX = 64
+
+    def __init__(self, device, cell_lower, cell_upper, reach, points, clearance):
+        super().__init__(cell_lower, cell_upper, reach, points, clearance)
+        self.device = device
+        up = device.upload
+        count = len(points)
+        self.d_points, self.d_clearance = up(points, "point"), up(clearance, "float")
+        self.d_polished = up(np.zeros(count, dtype=np.int64), "index")
+        self.d_lower, self.d_upper, self.d_reach = up(cell_lower, "point"), up(cell_upper, "point"), up(reach, "float")
+        # Answer buffers of the compacting kernels: at most one row per prototype.
+        self.answers = (device.empty(count, "index"), device.empty(count, "float"),
+                        device.empty(count, "point"), device.empty(count, "index"))
+        self.d_counter, self.d_top = device.empty(1, "index"), device.empty(1, "float")
+        self.width = self.FIRST_WIDTH
+        self.prefix = min(count, self.FIRST_PREFIX)
+        self._window = FIRST_WINDOW
+        self._steps = {}
+
+    def _compact(self, kernel, *args):
+        """Run a kernel that appends matches: ids (m,) ascending, their clearances, points (m, d)
+        and polish flags, and the device's last maximum (``d_top``), with one synchronisation."""
+        device = self.device
+        device.fill(self.d_counter, 0)
+        device.launch(kernel, len(self), *args, self.d_counter, *self.answers)
+        counter, top, *answers = device.fetch(
+            (self.d_counter, 1), (self.d_top, 1), *[(answer, self.prefix) for answer in self.answers]
+        )
+        count = int(counter[0])
+        if count > self.prefix:
+            answers = device.fetch(*[(answer, count) for answer in self.answers])
+        self.prefix = min(len(self), max(self.FIRST_PREFIX, 2 * count))
+        ids, clearance, points, flags = [answer[:count] for answer in answers]
+        order = np.argsort(ids)  # atomics append in any order; sorting makes runs repeatable
+        return ids[order], clearance[order], points[order], flags[order], float(top[0])
+
+    def _select(self, low=-np.inf, high=np.inf, unpolished=False, relative=-1.0):
+        """:meth:`select`, and with ``relative >= 0`` the low bound raised to ``(1 - relative)``
+        times the maximum where that is positive; the maximum is found on the device first."""
+        if relative >= 0:
+            self.device.fill(self.d_top, -np.inf)
+            self.device.launch("max_all", len(self), self.d_clearance, self.d_top)
+        return self._compact("select_all", self.d_clearance, self.d_polished, self.d_points, float(low),
+                             float(high), int(unpolished), self.d_top, float(relative))
+
+    def select(self, low=-np.inf, high=np.inf, unpolished=False):
+        ids, clearance, _, _, _ = self._select(low, high, unpolished)
+        return ids, clearance
+
+    def leaders(self, k, window):
+        k = min(k, len(self))
+        relative = max(self._window, window)
+        while True:
+            ids, clearance, points, polished, top = self._select(relative=relative)
+            low = top * (1 - relative) if top > 0 and relative < 1 else -np.inf
+            kth = top_order(ids, clearance, k)[1][-1] if len(ids) >= k else None
+            # Done when it holds k leaders and every prototype within the window of the k-th.
+            if low == -np.inf or (kth is not None and (kth <= 0 or low <= (1 - window) * kth)):
+                break
+            relative = min(1.0, relative * WIDEN)
+        self._window = relative if len(ids) < 4 * k + 64 else max(window, relative / WIDEN)
+        order = np.lexsort((ids, -clearance))[:k]
+        kth = clearance[order[-1]]
+        unpolished = ids[(clearance >= (1 - window) * kth) & (polished == 0)] if kth > 0 else ids[:0]
+        return ids[order], clearance[order], points[order], unpolished
+
+    def touched(self, new_centers, new_radii):
+        up = self.device.upload
+        ids, _, points, _, _ = self._compact("touched_select", self.d_points, self.d_clearance, self.d_polished,
+                                             up(new_centers, "point"), up(new_radii, "float"))
+        return ids, points
+
+    def gather(self, ids):
+        count = len(ids)
+        if count == 0:
+            return np.empty((0, self.dim)), np.empty(0)
+        device = self.device
+        out_points, out_clearance = device.empty(count, "point"), device.empty(count, "float")
+        device.launch("gather_ids", count, device.upload(ids, "index"), self.d_points, self.d_clearance,
+                      out_points, out_clearance)
+        points, clearance = device.fetch((out_points, count), (out_clearance, count))
+        return points, clearance
+
+    def _neighbours(self, d_ids, count, d_centers, d_radii):
+        """(count, width) table of the spheres near each prototype's cell, padded with m."""
+        device = self.device
+        while True:
+            table = device.empty((count, self.width), "index")
+            device.fill(self.d_counter, 0)
+            device.launch("near_ids", count, d_ids, self.d_lower, self.d_upper, self.d_reach, d_centers, d_radii,
+                          self.d_counter, table)
+            widest = int(device.fetch((self.d_counter, 1))[0][0])
+            if widest <= self.width:
+                return table
+            self.width = widest
+
+    def move(self, ids, centers, radii, steps, starts=None, polish=False):
+        count = len(ids)
+        if count == 0:
+            return
+        device = self.device
+        d_centers, d_radii = device.spheres(centers, radii)
+        d_ids = device.upload(ids, "index")
+        table = self._neighbours(d_ids, count, d_centers, d_radii)
+        tries = 0 if starts is None else len(starts)
+        d_starts = device.upload(starts if tries else np.zeros((1, count, self.dim)), "point")
+        key = (id(steps), len(steps))
+        if key not in self._steps:  # the driver's two schedules: copy each once
+            self._steps[key] = (steps, device.upload(steps, "float"))
+        device.launch("move_ids", count, d_ids, d_starts, tries, self.d_points, self.d_clearance, self.d_polished,
+                      self.d_lower, self.d_upper, device.params, d_centers, d_radii, table,
+                      self._steps[key][1], device.h, int(polish))
