@@ -17,7 +17,9 @@ for item in "$@"; do
     tests)
       timeout 300 python3 -m pytest -q -x -p no:cacheprovider tests/test_backends.py 2>&1 | tail -15 | tee "$OUT/tests.txt" ;;
     profile)
-      timeout 200 python3 bench/profile_rounds.py --backends warp numba-cuda numba --count 3000 2>&1 | tee "$OUT/profile.txt" ;;
+      timeout 120 python3 bench/profile_rounds.py --backends warp numba-cuda numba --count 3000 2>&1 | tee "$OUT/profile.txt"
+      timeout 120 python3 bench/profile_rounds.py --backends warp numba-cuda --count 3000 --kernels 2>&1 | tee -a "$OUT/profile.txt"
+      timeout 200 python3 bench/profile_rounds.py --backends warp numba-cuda --count 20000 --batch 64 --kernels 2>&1 | tee -a "$OUT/profile.txt" ;;
     *)
       cold=$(mktemp -d)
       WARP_CACHE_PATH="$cold/warp" NDPACK_CACHE="$cold/ndpack" NUMBA_NUM_THREADS=16 \

@@ -4,7 +4,9 @@
 
 Compiles first (a 3-sphere packing), then profiles the packing alone. Prints rounds per second
 and the functions that take the most time themselves; on a GPU, time spent waiting for the device
-shows up in the synchronising calls (fetch).
+shows up in the synchronising calls (fetch). ``--kernels`` instead times each device-store call
+(kernel launches synchronised one by one, uploads, fetches) on the GPU backends: slower overall,
+but it says which kernel costs what.
 """
 
 from __future__ import annotations
@@ -26,10 +28,14 @@ def main():
     parser.add_argument("--count", type=int, default=3000)
     parser.add_argument("--batch", type=int, default=1)
     parser.add_argument("--top", type=int, default=18)
+    parser.add_argument("--kernels", action="store_true", help="time each device call (GPU backends)")
     args = parser.parse_args()
     shape = nd.Box(np.zeros(3), np.ones(3))
     for backend in args.backends:
         nd.pack(shape, 3, backend=backend)
+        if args.kernels:
+            time_device_calls(shape, backend, args.count, args.batch)
+            continue
         profile = cProfile.Profile()
         started = time.perf_counter()
         profile.enable()
@@ -42,6 +48,44 @@ def main():
         text = io.StringIO()
         pstats.Stats(profile, stream=text).sort_stats("tottime").print_stats(args.top)
         print("\n".join(line for line in text.getvalue().splitlines()[6:] if line.strip()))
+
+
+def time_device_calls(shape, backend, count, batch):
+    """Seconds and calls per device-store operation, each launch synchronised on its own."""
+    from ndpack.backends.prototypes import DevicePrototypes
+
+    totals = {}
+    original = DevicePrototypes.__init__
+
+    def timed(name, function, synchronise):
+        def wrapper(*args, **kwargs):
+            started = time.perf_counter()
+            result = function(*args, **kwargs)
+            synchronise()
+            key = name if name != "launch" else f"launch {args[0]}"
+            seconds, calls = totals.get(key, (0.0, 0))
+            totals[key] = (seconds + time.perf_counter() - started, calls + 1)
+            return result
+        return wrapper
+
+    def instrumented(self, device, *rest):
+        original(self, device, *rest)
+        synchronise = device.synchronize
+        for name in ("launch", "upload", "fetch", "fill", "spheres"):
+            setattr(device, name, timed(name, getattr(device, name), synchronise))
+
+    DevicePrototypes.__init__ = instrumented
+    try:
+        started = time.perf_counter()
+        packing = nd.pack(shape, count, backend=backend, batch=batch)
+        wall = time.perf_counter() - started
+    finally:
+        DevicePrototypes.__init__ = original
+    rounds = len(packing.stats.time)
+    print(f"== {backend} (each call synchronised): {len(packing.radii)} spheres, {rounds} rounds, batch {batch}, "
+          f"{wall:.2f} s")
+    for key, (seconds, calls) in sorted(totals.items(), key=lambda item: -item[1][0]):
+        print(f"  {key:24s} {seconds:8.3f} s  {calls:7d} calls  {1e6 * seconds / calls:9.1f} us each")
 
 
 if __name__ == "__main__":

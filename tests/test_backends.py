@@ -265,11 +265,14 @@ def test_small_device_packing_equals_host_packing(name):
     for batch in (1, 4):
         packing = nd.pack(shape, 25, grid=16, batch=batch, backend=name)
         reference = nd.pack(shape, 25, grid=16, batch=batch, backend="numba")
-        # On a CPU the arithmetic is the same to the last bit; a GPU may fuse multiply-adds.
+        # On a CPU the arithmetic is the same to the last bit, so is the packing. A GPU may fuse
+        # multiply-adds: the zig-zag to a Voronoi node amplifies the last bits, and once two
+        # candidates swap places the packings part; the first spheres still agree.
         on_cpu = SIMULATED or str(getattr(backends.get_backend(name), "device", "cpu")) == "cpu"
-        tolerance = 1e-12 if on_cpu else 1e-6
-        np.testing.assert_allclose(packing.radii[:10], reference.radii[:10], rtol=0, atol=tolerance)
-        assert abs(packing.fill - reference.fill) <= 1e-3 * reference.fill
+        same = 25 if on_cpu else 3
+        np.testing.assert_allclose(packing.radii[:same], reference.radii[:same], rtol=0, atol=1e-12 if on_cpu else 1e-6)
+        assert packing.verify().ok
+        assert abs(packing.fill - reference.fill) <= (1e-9 if on_cpu else 0.01) * reference.fill
 
 
 @pytest.mark.skipif(not _working("warp"), reason="warp is not installed")

@@ -179,10 +179,10 @@ class NumbaCudaBackend(Backend):
             self._geometries[dim] = numba_namespace(shape_free(dim), "cuda", KERNELS + ENTRIES, {"H": 1.0}, self._jit)
         return self._geometries[dim]
 
-    def _launch(self, kernel, count, *args):
+    def _launch(self, kernel, count, *args, stream=0):
         if count:
             blocks = (count + THREADS_PER_BLOCK - 1) // THREADS_PER_BLOCK
-            kernel[blocks, THREADS_PER_BLOCK](*args)
+            kernel[blocks, THREADS_PER_BLOCK, stream](*args)
 
     def _spheres_and_table(self, centers, radii, neighbours):
         d_centers, d_radii = self._device_spheres(centers, radii)
@@ -253,7 +253,11 @@ class NumbaCudaBackend(Backend):
 
 
 class _CudaDevice:
-    """The device adapter of :class:`~ndpack.backends.prototypes.DevicePrototypes` for one shape."""
+    """The device adapter of :class:`~ndpack.backends.prototypes.DevicePrototypes` for one shape.
+
+    Kernels and copies queue on one stream; a fetch copies into pinned buffers through the driver
+    call itself, because slicing a device array costs tens of microseconds in numba-cuda.
+    """
 
     DTYPES = {"float": np.float64, "point": np.float64, "index": np.int64}
 
@@ -261,16 +265,24 @@ class _CudaDevice:
         self.backend, self.cuda = backend, backend.cuda
         self.namespace, self.params = backend._kernels(shape)
         self.h = 0.0  # the step is compiled in (H); the kernels take it for Warp's sake
-        self.stream = self.cuda.default_stream()  # where the kernels run, so copies queue behind them
+        self.stream = self.cuda.stream()
         self._staging = {}  # (slot, dtype, row shape) -> pinned host array that fetch copies into
+        import numba
+
+        if numba.config.ENABLE_CUDASIM:  # the simulator copies whole arrays: give it slices
+            self._device_to_host = None
+        else:
+            from numba.cuda.cudadrv.driver import device_to_host
+
+            self._device_to_host = device_to_host
 
     def upload(self, host, kind):
-        return self.cuda.to_device(np.ascontiguousarray(host, dtype=self.DTYPES[kind]))
+        return self.cuda.to_device(np.ascontiguousarray(host, dtype=self.DTYPES[kind]), stream=self.stream)
 
     def empty(self, shape, kind):
         if kind == "point":
             shape = (shape, self.namespace["D"])
-        return self.cuda.device_array(shape, dtype=self.DTYPES[kind])
+        return self.cuda.device_array(shape, dtype=self.DTYPES[kind], stream=self.stream)
 
     def fill(self, array, value):
         array.copy_to_device(np.full(array.shape, value, dtype=array.dtype), stream=self.stream)
@@ -281,14 +293,21 @@ class _CudaDevice:
             key = (slot, array.dtype, array.shape[1:])
             if key not in self._staging or len(self._staging[key]) < count:
                 self._staging[key] = self.cuda.pinned_array((max(count, 256), *array.shape[1:]), dtype=array.dtype)
-            if count:  # pinned destination: asynchronous, one wait for all
-                array[:count].copy_to_host(self._staging[key][:count], stream=self.stream)
-            staged.append((self._staging[key], count))
+            buffer = self._staging[key]
+            if count and self._device_to_host is not None:
+                self._device_to_host(buffer, array, count * buffer[0].nbytes if buffer.ndim > 1 else
+                                     count * buffer.itemsize, stream=self.stream)
+            elif count:
+                array[:count].copy_to_host(buffer[:count], stream=self.stream)
+            staged.append((buffer, count))
         self.stream.synchronize()
         return [buffer[:count].copy() for buffer, count in staged]
 
+    def synchronize(self):
+        self.stream.synchronize()
+
     def launch(self, name, threads, *args):
-        self.backend._launch(self.namespace[name], threads, *args)
+        self.backend._launch(self.namespace[name], threads, *args, stream=self.stream)
 
     def spheres(self, centers, radii):
         return self.backend._device_spheres(centers, radii)

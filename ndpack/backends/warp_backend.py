@@ -235,6 +235,9 @@ class _WarpDevice:
             return values.astype(np.float64).reshape(-1, self.module.D)
         return values.astype(np.int64 if array.dtype is self.wp.int32 else np.float64)
 
+    def synchronize(self):
+        self.wp.synchronize_device(self.where)
+
     def launch(self, name, threads, *args):
         if threads:
             self.wp.launch(getattr(self.module, name), dim=threads, inputs=list(args), device=self.where)
