@@ -259,8 +259,13 @@ def test_small_device_store_round_trips_few_prototypes(name, monkeypatch):
 
 
 @pytest.mark.parametrize("name", DEVICE_STORES)
-def test_small_device_packing_equals_host_packing(name):
+def test_small_device_packing_equals_host_packing(name, monkeypatch):
     """The whole driver on device-resident prototypes gives the numba backend's packing."""
+    from ndpack.backends.prototypes import DevicePrototypes
+
+    # Small chunks and a one-column first table: every path of the neighbour kernels runs.
+    monkeypatch.setattr(DevicePrototypes, "NEAR_CHUNK", 3)
+    monkeypatch.setattr(DevicePrototypes, "FIRST_WIDTH", 1)
     shape = nd.Box([0.0, 0.0], [1.0, 1.0]) - nd.Ball([1.0, 1.0], 0.4)
     for batch in (1, 4):
         packing = nd.pack(shape, 25, grid=16, batch=batch, backend=name)

@@ -96,13 +96,57 @@ def gather_ids(ids, points, clearance, out_points, out_clearance):
         out_clearance[b] = clearance[i]
 
 
-def near_ids(ids, lower, upper, reach, centers, radii, width, out):
+def near_bound_ids(ids, lower, upper, reach, centers, radii, chunks, bound):
+    t = cuda.grid(1)
+    if t < ids.shape[0] * chunks:
+        b = t // chunks
+        i = ids[b]
+        half2 = 0.0
+        for k in range(D):
+            half2 += 0.25 * (upper[i, k] - lower[i, k]) ** 2
+        half = math.sqrt(half2)
+        size = (radii.shape[0] + chunks - 1) // chunks
+        best = reach[i]
+        for s in range((t % chunks) * size, min((t % chunks + 1) * size, radii.shape[0])):
+            length2 = 0.0
+            for k in range(D):
+                u = 0.5 * (lower[i, k] + upper[i, k]) - centers[s, k]
+                length2 += u * u
+            best = min(best, math.sqrt(length2) - radii[s] + half)
+        cuda.atomic.min(bound, b, best)
+
+
+def near_fill_ids(ids, lower, upper, centers, radii, chunks, bound, found, out):
+    t = cuda.grid(1)
+    if t < ids.shape[0] * chunks:
+        b = t // chunks
+        i = ids[b]
+        size = (radii.shape[0] + chunks - 1) // chunks
+        for s in range((t % chunks) * size, min((t % chunks + 1) * size, radii.shape[0])):
+            outside2 = 0.0
+            for k in range(D):
+                u = max(lower[i, k] - centers[s, k], centers[s, k] - upper[i, k], 0.0)
+                outside2 += u * u
+            if math.sqrt(outside2) - radii[s] <= bound[b]:
+                slot = cuda.atomic.add(found, b, 1)
+                if slot < out.shape[1]:
+                    out[b, slot] = s
+
+
+def near_finish(found, sphere_count, width, out):
     b = cuda.grid(1)
-    if b < ids.shape[0]:
-        found = near_row(ids[b], b, lower, upper, reach, centers, radii, out, out.shape[1])
-        for j in range(found, out.shape[1]):
-            out[b, j] = radii.shape[0]
-        cuda.atomic.max(width, 0, found)
+    if b < found.shape[0]:
+        count = min(found[b], out.shape[1])
+        for j in range(1, count):
+            value = out[b, j]
+            k = j - 1
+            while k >= 0 and out[b, k] > value:
+                out[b, k + 1] = out[b, k]
+                k -= 1
+            out[b, k + 1] = value
+        for j in range(count, out.shape[1]):
+            out[b, j] = sphere_count
+        cuda.atomic.max(width, 0, found[b])
 
 
 def move_ids(ids, starts, tries, points, clearance, polished, lower, upper, prm, centers, radii, nbr, steps,
@@ -113,7 +157,7 @@ def move_ids(ids, starts, tries, points, clearance, polished, lower, upper, prm,
                  steps, polish)
 '''
 ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
-               "select_all", "max_all", "touched_select", "gather_ids", "near_ids", "move_ids")
+               "select_all", "max_all", "touched_select", "gather_ids", "near_bound_ids", "near_fill_ids", "near_finish", "move_ids")
 THREADS_PER_BLOCK = 128
 
 

@@ -139,11 +139,6 @@ def move_one(b, ids, starts, tries, points, clearance, polished, lower, upper, p
 
 def near_one(b, lower, upper, reach, centers, radii, out, width):
     """Spheres whose surface comes within the reach of box ``b``: how many, the first ``width`` in ``out``."""
-    return near_row(b, b, lower, upper, reach, centers, radii, out, width)
-
-
-def near_row(b, row, lower, upper, reach, centers, radii, out, width):
-    """As :func:`near_one` for box ``b``, written to row ``row`` of ``out``."""
     half2 = 0.0
     for k in range(D):
         half2 += 0.25 * (upper[b, k] - lower[b, k]) ** 2
@@ -163,7 +158,7 @@ def near_row(b, row, lower, upper, reach, centers, radii, out, width):
             outside2 += t * t
         if math.sqrt(outside2) - radii[s] <= bound:
             if found < width:
-                out[row, found] = s
+                out[b, found] = s
             found += 1
     return found
 

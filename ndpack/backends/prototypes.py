@@ -172,12 +172,15 @@ class DevicePrototypes(Prototypes):
         ``spheres(centers, radii)`` (device copies, never empty), ``params`` (the shape's
         parameters on the device) and ``h`` (the finite-difference step). Kinds are ``"float"``,
         ``"point"`` and ``"index"``. The kernels are ``max_all``, ``select_all``,
-        ``touched_select``, ``gather_ids``, ``near_ids`` and ``move_ids`` of the backend's text.
+        ``touched_select``, ``gather_ids``, ``near_bound_ids``, ``near_fill_ids``, ``near_finish`` and
+        ``move_ids`` of the backend's kernel text.
     Other parameters as in :class:`Prototypes`.
     """
 
     #: Neighbour-table columns allocated at first; grown to the widest row seen.
     FIRST_WIDTH = 8
+    #: Spheres one thread checks against one prototype's cell when building neighbour tables.
+    NEAR_CHUNK = 32
     #: Answer rows copied back with the counter, at least; more after larger answers.
     FIRST_PREFIX = 64
 
@@ -263,13 +266,26 @@ class DevicePrototypes(Prototypes):
         return points, clearance
 
     def _neighbours(self, d_ids, count, d_centers, d_radii):
-        """(count, width) table of the spheres near each prototype's cell, padded with m."""
+        """(count, width) table of the spheres near each prototype's cell, ascending, padded with m.
+
+        The same spheres as :meth:`Backend.near_spheres` finds; the kernels split the spheres
+        into chunks of about ``NEAR_CHUNK`` so that many threads share each prototype's walk.
+        """
         device = self.device
+        spheres = d_radii.shape[0]
+        chunks = max(1, -(-spheres // self.NEAR_CHUNK))
+        bound = device.empty(count, "float")
+        device.fill(bound, np.inf)
+        device.launch("near_bound_ids", count * chunks, d_ids, self.d_lower, self.d_upper, self.d_reach,
+                      d_centers, d_radii, chunks, bound)
+        found = device.empty(count, "index")
         while True:
             table = device.empty((count, self.width), "index")
+            device.fill(found, 0)
             device.fill(self.d_counter, 0)
-            device.launch("near_ids", count, d_ids, self.d_lower, self.d_upper, self.d_reach, d_centers, d_radii,
-                          self.d_counter, table)
+            device.launch("near_fill_ids", count * chunks, d_ids, self.d_lower, self.d_upper, d_centers, d_radii,
+                          chunks, bound, found, table)
+            device.launch("near_finish", count, found, spheres, self.d_counter, table)
             widest = int(device.fetch((self.d_counter, 1))[0][0])
             if widest <= self.width:
                 return table

@@ -205,23 +205,60 @@ def gather_ids(ids: wp.array(dtype=wp.int32), points: wp.array(dtype=VecD), clea
     out_clearance[b] = clearance[ids[b]]
 
 
+# The spheres near each prototype's cell, in three passes over (prototype, chunk of spheres)
+# pairs: one thread per prototype would walk all m spheres alone, and on a GPU that serial walk is
+# the slowest part of a round. Thread t serves prototype t // chunks and chunk t % chunks.
+
+
 @wp.kernel
-def near_ids(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
-             reach: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
-             width: wp.array(dtype=wp.int32), out: wp.array2d(dtype=wp.int32)):
-    """Row ``b`` of ``out``: the spheres within reach of the cell of prototype ``ids[b]``, padded."""
-    b = wp.tid()
+def near_bound_ids(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
+                   reach: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F), chunks: int,
+                   bound: wp.array(dtype=F)):
+    """``bound[b]``: the reference's upper bound of the clearance in the cell of ``ids[b]``."""
+    t = wp.tid()
+    b = t // chunks
     i = ids[b]
-    bound = near_bound(i, lower, upper, reach, centers, radii)
-    found = int(0)
-    for s in range(radii.shape[0]):
-        if box_gap(i, s, lower, upper, centers, radii) <= bound:
-            if found < out.shape[1]:
-                out[b, found] = s
-            found += 1
-    for j in range(found, out.shape[1]):
-        out[b, j] = radii.shape[0]
-    wp.atomic_max(width, 0, found)
+    middle = F(0.5) * (lower[i] + upper[i])
+    half = F(0.5) * wp.length(upper[i] - lower[i])
+    size = (radii.shape[0] + chunks - 1) // chunks
+    best = reach[i]
+    for s in range((t % chunks) * size, wp.min((t % chunks + 1) * size, radii.shape[0])):
+        best = wp.min(best, wp.length(middle - centers[s]) - radii[s] + half)
+    wp.atomic_min(bound, b, best)
+
+
+@wp.kernel
+def near_fill_ids(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
+                  centers: wp.array(dtype=VecD), radii: wp.array(dtype=F), chunks: int, bound: wp.array(dtype=F),
+                  found: wp.array(dtype=wp.int32), out: wp.array2d(dtype=wp.int32)):
+    """Append the spheres of this chunk that come within ``bound[b]`` of the cell to row ``b``."""
+    t = wp.tid()
+    b = t // chunks
+    i = ids[b]
+    size = (radii.shape[0] + chunks - 1) // chunks
+    for s in range((t % chunks) * size, wp.min((t % chunks + 1) * size, radii.shape[0])):
+        if box_gap(i, s, lower, upper, centers, radii) <= bound[b]:
+            slot = wp.atomic_add(found, b, 1)
+            if slot < out.shape[1]:
+                out[b, slot] = s
+
+
+@wp.kernel
+def near_finish(found: wp.array(dtype=wp.int32), sphere_count: int, width: wp.array(dtype=wp.int32),
+                out: wp.array2d(dtype=wp.int32)):
+    """Sort row ``b`` (the reference's order, so ties resolve alike), pad it, and widen ``width``."""
+    b = wp.tid()
+    count = wp.min(found[b], out.shape[1])
+    for j in range(1, count):
+        value = out[b, j]
+        k = j - 1
+        while k >= 0 and out[b, k] > value:
+            out[b, k + 1] = out[b, k]
+            k -= 1
+        out[b, k + 1] = value
+    for j in range(count, out.shape[1]):
+        out[b, j] = sphere_count
+    wp.atomic_max(width, 0, found[b])
 
 
 @wp.kernel
