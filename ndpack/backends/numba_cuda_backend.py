@@ -136,15 +136,7 @@ def near_fill_ids(ids, lower, upper, centers, radii, chunks, bound, found, out):
 def near_finish(found, sphere_count, width, out):
     b = cuda.grid(1)
     if b < found.shape[0]:
-        count = min(found[b], out.shape[1])
-        for j in range(1, count):
-            value = out[b, j]
-            k = j - 1
-            while k >= 0 and out[b, k] > value:
-                out[b, k + 1] = out[b, k]
-                k -= 1
-            out[b, k + 1] = value
-        for j in range(count, out.shape[1]):
+        for j in range(min(found[b], out.shape[1]), out.shape[1]):
             out[b, j] = sphere_count
         cuda.atomic.max(width, 0, found[b])
 

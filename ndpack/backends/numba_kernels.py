@@ -14,7 +14,10 @@ Array arguments: ``points``, ``lower``, ``upper``, ``centers`` (n, D) float64; `
 
 
 def nearest_obstacle(x, prm, centers, radii, nbr, row):
-    """Clearance of ``x`` and its nearest sphere (-1 when the shape's boundary is nearest)."""
+    """Clearance of ``x`` and its nearest sphere (-1 when the shape's boundary is nearest).
+
+    The row ``nbr[row]`` may list the spheres in any order: ties resolve by sphere id.
+    """
     clearance = -sd(x, prm)
     nearest = -1
     count = radii.shape[0]
@@ -26,7 +29,9 @@ def nearest_obstacle(x, prm, centers, radii, nbr, row):
                 t = x[k] - centers[s, k]
                 length2 += t * t
             gap = math.sqrt(length2) - radii[s]
-            if gap < clearance:
+            # Equal gaps: the lower sphere id wins, whatever the table's order (as the
+            # reference's argmin over ascending ids); the boundary wins over an equal sphere.
+            if gap < clearance or (gap == clearance and nearest > s):
                 clearance = gap
                 nearest = s
     return clearance, nearest

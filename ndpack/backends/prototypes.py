@@ -266,7 +266,7 @@ class DevicePrototypes(Prototypes):
         return points, clearance
 
     def _neighbours(self, d_ids, count, d_centers, d_radii):
-        """(count, width) table of the spheres near each prototype's cell, ascending, padded with m.
+        """(count, width) table of the spheres near each prototype's cell, padded with m.
 
         The same spheres as :meth:`Backend.near_spheres` finds; the kernels split the spheres
         into chunks of about ``NEAR_CHUNK`` so that many threads share each prototype's walk.

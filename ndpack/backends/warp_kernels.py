@@ -12,7 +12,10 @@ and ``sd(p, prm)``. Every kernel mirrors a step of the NumPy reference
 @wp.func
 def nearest_obstacle(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
                      nbr: wp.array2d(dtype=wp.int32), row: int):
-    """Clearance of ``x`` and its nearest sphere (-1 when the shape's boundary is nearest)."""
+    """Clearance of ``x`` and its nearest sphere (-1 when the shape's boundary is nearest).
+
+    The row ``nbr[row]`` may list the spheres in any order: ties resolve by sphere id.
+    """
     clearance = -sd(x, prm)
     nearest = int(-1)
     count = radii.shape[0]
@@ -20,7 +23,9 @@ def nearest_obstacle(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=Ve
         s = nbr[row, j]
         if s < count:
             gap = wp.length(x - centers[s]) - radii[s]
-            if gap < clearance:
+            # Equal gaps: the lower sphere id wins, whatever the table's order (as the
+            # reference's argmin over ascending ids); the boundary wins over an equal sphere.
+            if gap < clearance or (gap == clearance and nearest > s):
                 clearance = gap
                 nearest = s
     return clearance, nearest
@@ -246,17 +251,10 @@ def near_fill_ids(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), up
 @wp.kernel
 def near_finish(found: wp.array(dtype=wp.int32), sphere_count: int, width: wp.array(dtype=wp.int32),
                 out: wp.array2d(dtype=wp.int32)):
-    """Sort row ``b`` (the reference's order, so ties resolve alike), pad it, and widen ``width``."""
+    """Pad row ``b`` and widen ``width``. Rows stay in the order the atomics gave: the nearest
+    sphere is found alike in any order (see nearest_obstacle)."""
     b = wp.tid()
-    count = wp.min(found[b], out.shape[1])
-    for j in range(1, count):
-        value = out[b, j]
-        k = j - 1
-        while k >= 0 and out[b, k] > value:
-            out[b, k + 1] = out[b, k]
-            k -= 1
-        out[b, k + 1] = value
-    for j in range(count, out.shape[1]):
+    for j in range(wp.min(found[b], out.shape[1]), out.shape[1]):
         out[b, j] = sphere_count
     wp.atomic_max(width, 0, found[b])
 
