@@ -13,7 +13,9 @@ Only prototypes *touched* by a new sphere (their clearance ball meets it) move a
 keep their nearest obstacle, so their clearance and local maximum are unchanged. This gives the
 same packing as moving every prototype every round, at a fraction of the cost.
 
-Written once for every backend: the hot loops are :class:`~ndpack.backends.Backend` calls.
+Written once for every backend: the hot loops are :class:`~ndpack.backends.Backend` calls, and
+the prototypes live in the backend's store (:mod:`ndpack.backends.prototypes`), on the GPU for
+the GPU backends, so that a round copies only its answers between host and device.
 """
 
 from __future__ import annotations

@@ -2,7 +2,9 @@
 
 The per-point functions are the CPU backend's (:mod:`ndpack.backends.numba_kernels`), compiled
 as device functions. The inserted spheres live on the device and only new ones are copied up
-(:class:`~ndpack.backends.device_spheres.DeviceSpheres`); prototypes travel per call. float64 throughout: an H100 runs float64 at
+(:class:`~ndpack.backends.device_spheres.DeviceSpheres`), and during a packing so do the
+prototypes (:class:`~ndpack.backends.prototypes.DevicePrototypes`, through :class:`_CudaDevice`);
+the array operations copy their inputs per call. float64 throughout: an H100 runs float64 at
 half its float32 rate, and the packing stays as exact as the CPU's.
 
 Without a GPU, set ``NUMBA_ENABLE_CUDASIM=1`` to run the same kernels in Numba's CUDA simulator

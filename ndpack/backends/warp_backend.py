@@ -3,7 +3,9 @@
 A shape's kernel program is printed in Warp's dialect and written, with the kernels of
 :mod:`ndpack.backends.warp_kernels`, into one generated module (see
 :func:`ndpack.kernels.compile.warp_module`); Warp compiles and caches it. The inserted spheres
-live on the device (:class:`~ndpack.backends.device_spheres.DeviceSpheres`).
+live on the device (:class:`~ndpack.backends.device_spheres.DeviceSpheres`), and during a
+packing so do the prototypes (:class:`~ndpack.backends.prototypes.DevicePrototypes`, through
+:class:`_WarpDevice`).
 
 Precision: float64 by default. ``precision="float32"`` runs the kernels in float32 (faster on
 GPUs without full float64 rate); clearances are then accurate to about 1e-7 of the shape's size,
