@@ -28,6 +28,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .backends import get_backend
+from .backends.prototypes import best_starts
 from .errors import ParameterError, ShapeError
 from .oracle import Oracle, ball_volume, check_compatible, check_packable
 from .packing import Packing, RoundStats
@@ -155,7 +156,7 @@ class _ProtoSphere:
         self.reach = -centre_distance[keep] + half_diagonal
         starts = self._candidate_starts(centres[keep][None])
         no_spheres = np.zeros((len(self.cell_lower), 0), dtype=np.int64)
-        self.points, self.clearance = self._best_start(starts, no_spheres)
+        self.points, self.clearance = best_starts(self.backend, self.shape, starts, *self.spheres, no_spheres)
         alive = self.clearance > 0
         if not alive.any():
             raise ShapeError(
@@ -181,18 +182,6 @@ class _ProtoSphere:
         tries = self.restarts if tries is None else tries
         random = lower + (upper - lower) * self.rng.random((tries, *lower.shape))
         return np.concatenate([first, random])
-
-    def _best_start(self, starts, neighbours):
-        """Per prototype, the start with the largest clearance: ((n, d), (n,))."""
-        tries, count, dim = starts.shape
-        flat = starts.reshape(-1, dim)
-        tiled = np.tile(neighbours, (tries, 1))
-        clearance = self.backend.clearance(
-            self.shape, flat, self.centers[: self.count], self.radii[: self.count], tiled
-        ).reshape(tries, count)
-        best = np.argmax(clearance, axis=0)
-        rows = np.arange(count)
-        return starts[best, rows], clearance[best, rows]
 
     @property
     def spheres(self):

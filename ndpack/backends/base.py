@@ -42,7 +42,7 @@ class Backend:
         -------
         (n,) float64
         """
-        raise NotImplementedError
+        return self._free_space(shape, points, centers, radii, neighbours, directions=False)[0]
 
     def free_space(self, shape, points, centers, radii, neighbours):
         """Clearance (n,) and the direction (n, d) away from each point's nearest obstacle.
@@ -51,6 +51,11 @@ class Backend:
         for an exact distance), else the unit vector from the nearest sphere's centre. Arguments
         as in :meth:`clearance`.
         """
+        return self._free_space(shape, points, centers, radii, neighbours, directions=True)
+
+    def _free_space(self, shape, points, centers, radii, neighbours, directions):
+        """What :meth:`clearance` and :meth:`free_space` run: with ``directions=False`` the
+        direction array may have no rows, which spares the compiled backends that work."""
         raise NotImplementedError
 
     def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):

@@ -95,12 +95,6 @@ class NumbaBackend(Backend):
         finally:
             self.numba.set_num_threads(previous)
 
-    def clearance(self, shape, points, centers, radii, neighbours):
-        return self._free_space(shape, points, centers, radii, neighbours, directions=False)[0]
-
-    def free_space(self, shape, points, centers, radii, neighbours):
-        return self._free_space(shape, points, centers, radii, neighbours, directions=True)
-
     def _free_space(self, shape, points, centers, radii, neighbours, directions):
         namespace, params = self._kernels(shape)
         out = np.empty(len(points))

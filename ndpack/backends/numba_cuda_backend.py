@@ -227,12 +227,6 @@ class NumbaCudaBackend(Backend):
         table = neighbours if neighbours.shape[1] else np.full((len(neighbours), 1), len(centers))
         return d_centers, d_radii, self.cuda.to_device(np.ascontiguousarray(table, dtype=np.int64))
 
-    def clearance(self, shape, points, centers, radii, neighbours):
-        return self._free_space(shape, points, centers, radii, neighbours, directions=False)[0]
-
-    def free_space(self, shape, points, centers, radii, neighbours):
-        return self._free_space(shape, points, centers, radii, neighbours, directions=True)
-
     def _free_space(self, shape, points, centers, radii, neighbours, directions):
         namespace, params = self._kernels(shape)
         d_centers, d_radii, table = self._spheres_and_table(centers, radii, neighbours)
@@ -333,8 +327,7 @@ class _CudaDevice:
                 self._staging[key] = self.cuda.pinned_array((max(count, 256), *array.shape[1:]), dtype=array.dtype)
             buffer = self._staging[key]
             if count and self._device_to_host is not None:
-                self._device_to_host(buffer, array, count * buffer[0].nbytes if buffer.ndim > 1 else
-                                     count * buffer.itemsize, stream=self.stream)
+                self._device_to_host(buffer, array, buffer[:count].nbytes, stream=self.stream)
             elif count:
                 array[:count].copy_to_host(buffer[:count], stream=self.stream)
             staged.append((buffer, count))

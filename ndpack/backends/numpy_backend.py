@@ -34,7 +34,7 @@ class NumpyBackend(Backend):
 
     name = "numpy"
 
-    def _free_space(self, shape, points, neighbour_centers, neighbour_radii):
+    def _free_space_among(self, shape, points, neighbour_centers, neighbour_radii):
         """Clearance and the unit direction away from the nearest obstacle, for (n, d) points."""
         distances, gradients = shape._distance_and_gradient(points)
         clearance = -distances
@@ -64,7 +64,7 @@ class NumpyBackend(Backend):
 
     def free_space(self, shape, points, centers, radii, neighbours):
         centers, radii = _with_sphere_at_infinity(centers, radii)
-        return self._free_space(shape, points, centers[neighbours], radii[neighbours])
+        return self._free_space_among(shape, points, centers[neighbours], radii[neighbours])
 
     def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
         centers, radii = _with_sphere_at_infinity(centers, radii)
@@ -74,7 +74,7 @@ class NumpyBackend(Backend):
         best = np.full(len(points), -np.inf)
         # One evaluation more than there are steps: the point after the last step counts too.
         for eps in [*steps, 0.0]:
-            clearance, direction = self._free_space(shape, points, neighbour_centers, neighbour_radii)
+            clearance, direction = self._free_space_among(shape, points, neighbour_centers, neighbour_radii)
             # The zig-zag around a Voronoi node is not monotone: keep the best point seen.
             better = clearance > best
             best[better] = clearance[better]

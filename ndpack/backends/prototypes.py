@@ -21,14 +21,35 @@ import numpy as np
 FIRST_WINDOW, WIDEN = 0.05, 4.0
 
 
-def top_order(ids: np.ndarray, clearance: np.ndarray, k: int):
-    """The ``k`` largest clearances, largest first and ties by lower id: ((k,), (k,)).
+def best_starts(backend, shape, candidates, centers, radii, neighbours):
+    """Per prototype, the candidate with the largest clearance (the first of equals).
+
+    Parameters
+    ----------
+    candidates : (t, k, d) float64
+        ``t`` starting points for each of ``k`` prototypes.
+    centers, radii, neighbours :
+        The spheres and each prototype's (k, w) neighbour table, as in :meth:`Backend.clearance`.
+
+    Returns
+    -------
+    points : (k, d) float64 and clearance : (k,) float64
+    """
+    tries, count, dim = candidates.shape
+    clearance = backend.clearance(
+        shape, candidates.reshape(-1, dim), centers, radii, np.tile(neighbours, (tries, 1))
+    ).reshape(tries, count)
+    best, rows = np.argmax(clearance, axis=0), np.arange(count)
+    return candidates[best, rows], clearance[best, rows]
+
+
+def top_order(ids: np.ndarray, clearance: np.ndarray, k: int) -> np.ndarray:
+    """Positions (k,) of the ``k`` largest clearances, largest first and ties by lower id.
 
     The tie rule makes every backend choose the same prototype among equal clearances, which
     symmetric shapes produce.
     """
-    order = np.lexsort((ids, -clearance))[:k]
-    return ids[order], clearance[order]
+    return np.lexsort((ids, -clearance))[:k]
 
 
 class Prototypes:
@@ -121,7 +142,9 @@ class HostPrototypes(Prototypes):
             clearance = self.clearance[ids]
         else:
             kth = np.partition(self.clearance, len(self) - k)[len(self) - k]
-            ids, clearance = top_order(*self.select(low=kth), k)
+            ids, clearance = self.select(low=kth)
+            order = top_order(ids, clearance, k)
+            ids, clearance = ids[order], clearance[order]
         kth = clearance[-1]
         unpolished = self.select(low=(1 - window) * kth, unpolished=True)[0] if kth > 0 else ids[:0]
         return ids, clearance, self.points[ids], unpolished
@@ -139,12 +162,7 @@ class HostPrototypes(Prototypes):
         neighbours = backend.near_spheres(lower, upper, self.reach[ids], centers, radii)
         points = self.points[ids]
         if starts is not None:
-            candidates = np.concatenate([points[None], starts])  # (t + 1, k, d)
-            tries, count, dim = candidates.shape
-            clearance = backend.clearance(
-                shape, candidates.reshape(-1, dim), centers, radii, np.tile(neighbours, (tries, 1))
-            ).reshape(tries, count)
-            points = candidates[np.argmax(clearance, axis=0), np.arange(count)]
+            points, _ = best_starts(backend, shape, np.concatenate([points[None], starts]), centers, radii, neighbours)
         points, clearance = backend.converge(shape, points, lower, upper, centers, radii, neighbours, steps)
         if polish:
             better = clearance > self.clearance[ids]
@@ -237,13 +255,13 @@ class DevicePrototypes(Prototypes):
         while True:
             ids, clearance, points, polished, top = self._select(relative=relative)
             low = top * (1 - relative) if top > 0 and relative < 1 else -np.inf
-            kth = top_order(ids, clearance, k)[1][-1] if len(ids) >= k else None
+            kth = np.partition(clearance, len(ids) - k)[len(ids) - k] if len(ids) >= k else None
             # Done when it holds k leaders and every prototype within the window of the k-th.
             if low == -np.inf or (kth is not None and (kth <= 0 or low <= (1 - window) * kth)):
                 break
             relative = min(1.0, relative * WIDEN)
         self._window = relative if len(ids) < 4 * k + 64 else max(window, relative / WIDEN)
-        order = np.lexsort((ids, -clearance))[:k]
+        order = top_order(ids, clearance, k)
         kth = clearance[order[-1]]
         unpolished = ids[(clearance >= (1 - window) * kth) & (polished == 0)] if kth > 0 else ids[:0]
         return ids[order], clearance[order], points[order], unpolished

@@ -131,12 +131,6 @@ class WarpBackend(Backend):
         return d_centers, d_radii, self._array(table, self.wp.int32)
 
     # ------------------------------------------------------------------ operations
-    def clearance(self, shape, points, centers, radii, neighbours):
-        return self._free_space(shape, points, centers, radii, neighbours, directions=False)[0]
-
-    def free_space(self, shape, points, centers, radii, neighbours):
-        return self._free_space(shape, points, centers, radii, neighbours, directions=True)
-
     def _free_space(self, shape, points, centers, radii, neighbours, directions):
         module, params, h = self._module(shape)
         d_centers, d_radii, table = self._spheres_and_table(module, centers, radii, neighbours)
