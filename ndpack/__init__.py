@@ -14,6 +14,7 @@ Everything public is re-exported here; the rest is internal.
 from .errors import (
     BackendError,
     KernelError,
+    MeshWarning,
     BoundsError,
     DimensionError,
     NdpackError,
@@ -32,7 +33,7 @@ from .verify import Verification, verify
 __version__ = "0.1.0"
 
 __all__ = [
-    "BackendError", "BoundsError", "KernelError", "DimensionError", "NdpackError", "OracleError", "Oracle",
+    "BackendError", "BoundsError", "KernelError", "DimensionError", "MeshWarning", "NdpackError", "OracleError", "Oracle",
     "Packing", "ParameterError", "RoundStats", "ShapeError", "Verification", "Volume",
     "ball_volume", "pack", "rotation", "verify", *_shape_names,
 ]

@@ -36,3 +36,7 @@ class BackendError(NdpackError, RuntimeError):
 
 class KernelError(NdpackError, TypeError):
     """A shape or plug-in cannot be compiled to a scalar kernel for a compiled backend."""
+
+
+class MeshWarning(UserWarning):
+    """A mesh was repaired, or its inside is decided by a method that can be wrong near its holes."""

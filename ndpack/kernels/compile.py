@@ -19,6 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .language import STACK_DEPTH
+
 _numba_cache: dict[tuple, dict] = {}
 _warp_cache: dict[str, object] = {}
 
@@ -59,9 +61,9 @@ def numba_namespace(program, target: str, kernels: str, constants: dict, jit_ker
         return _numba_cache[key]
     namespace = {"math": math, "np": np, "D": program.dim, **constants}
     if target == "cuda":
-        from numba import cuda, float64
+        from numba import cuda, float64, int32
 
-        namespace.update(cuda=cuda, float64=float64)
+        namespace.update(cuda=cuda, float64=float64, int32=int32)
         jit = cuda.jit(device=True)
         local_point = f"cuda.local.array({program.dim}, float64)"
     else:
@@ -91,7 +93,8 @@ def warp_module(program, float_name: str, kernels: str):
         "from typing import Any\n\nimport warp as wp\n\n"
         "wp.set_module_options({'enable_backward': False})  # no gradients needed: half the compile time\n\n"
         f"F = wp.{float_name}\nD = {program.dim}\n"
-        f"VecD = wp.types.vector(length={program.dim}, dtype=wp.{float_name})\n\n\n"
+        f"VecD = wp.types.vector(length={program.dim}, dtype=wp.{float_name})\n"
+        f"Stack = wp.types.vector(length={STACK_DEPTH}, dtype=wp.int32)  # stack() of the kernel language\n\n\n"
     )
     text = header + program.source("warp", float_name) + "\n\n" + kernels
     digest = hashlib.sha1(text.encode()).hexdigest()[:20]

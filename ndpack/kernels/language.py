@@ -16,7 +16,8 @@ The subset
 - Expressions: int, float and bool constants; ``+ - * / // % **``; comparisons; ``and or
   not``; ``a if c else b``; ``math.<f>(...)`` for the functions in :data:`MATH_FUNCTIONS`,
   ``math.pi`` and ``math.e``; ``min``, ``max``, ``abs``, ``int``, ``float``; ``point()``, a
-  new local point of length ``D``; calls of other kernel functions.
+  new local point of length ``D``; ``stack()``, a new local array of :data:`STACK_DEPTH` ints
+  (for tree traversals: ``s[i] = n``, ``n = s[i]``); calls of other kernel functions.
 - Not allowed: other globals, lists, tuples, strings, attributes, ``inf`` (use a large number).
 
 Dialects
@@ -43,9 +44,13 @@ MATH_FUNCTIONS = frozenset(
 )
 #: ``math`` constants, inlined as numbers.
 MATH_CONSTANTS = {"pi": math.pi, "e": math.e}
-BUILTINS = frozenset({"min", "max", "abs", "int", "float", "range", "point"})
+BUILTINS = frozenset({"min", "max", "abs", "int", "float", "range", "point", "stack"})
+#: Length of the int array ``stack()`` makes: a traversal of a balanced tree of 2^32 leaves.
+STACK_DEPTH = 64
 
-INT, FLOAT, BOOL, POINT, ARRAY = "int", "float", "bool", "point", "array"
+INT, FLOAT, BOOL, POINT, ARRAY, STACK = "int", "float", "bool", "point", "array", "stack"
+#: Types of names that hold arrays (indexable, never numbers).
+_ARRAYS = (POINT, ARRAY, STACK)
 
 _BINARY = (ast.Add, ast.Sub, ast.Mult, ast.Div, ast.FloorDiv, ast.Mod, ast.Pow)
 _UNARY = (ast.USub, ast.UAdd, ast.Not)
@@ -140,9 +145,10 @@ class _Checker(ast.NodeVisitor):
         if name == "D" or name in self.signature.names[:2]:
             self.fail(node, f"cannot assign to {name!r}")
         old = self.types.get(name)
-        if old in (POINT, ARRAY) or kind in (POINT, ARRAY):
+        if old in _ARRAYS or kind in _ARRAYS:
             if old is not None and old != kind:
-                self.fail(node, f"{name!r} cannot be both a point and a number")
+                self.fail(node, f"{name!r} cannot be both an array ({old if old in _ARRAYS else kind}) and "
+                          "something else")
             new = kind
         elif old is None:
             new = kind
@@ -211,10 +217,14 @@ class _Checker(ast.NodeVisitor):
         if isinstance(target, ast.Name):
             self.assign_name(node, target.id, kind)
         elif isinstance(target, ast.Subscript) and isinstance(target.value, ast.Name):
-            if self.types.get(target.value.id) != POINT or target.value.id == self.signature.names[0]:
-                self.fail(node, "only local points made with point() can be assigned into")
+            base = self.types.get(target.value.id)
+            if base not in (POINT, STACK) or target.value.id == self.signature.names[0]:
+                self.fail(node, "only local points made with point() and stacks made with stack() can be "
+                          "assigned into")
             if self.expr(target.slice) != INT:
                 self.fail(node, "indices must be ints")
+            if base == STACK and kind != INT:
+                self.fail(node, "a stack holds ints; wrap the value in int()")
             if kind not in (INT, FLOAT):
                 self.fail(node, "a point's coordinates are numbers")
         else:
@@ -255,11 +265,11 @@ class _Checker(ast.NodeVisitor):
             return self.types[node.id]
         if isinstance(node, ast.Subscript):
             base = node.value
-            if not (isinstance(base, ast.Name) and self.types.get(base.id) in (POINT, ARRAY)):
-                self.fail(node, "only the point, the parameters and local points can be indexed")
+            if not (isinstance(base, ast.Name) and self.types.get(base.id) in _ARRAYS):
+                self.fail(node, "only the point, the parameters, local points and stacks can be indexed")
             if isinstance(node.slice, ast.Slice) or self.expr(node.slice) != INT:
                 self.fail(node, "indices must be single ints (no slices); wrap floats in int()")
-            return FLOAT
+            return INT if self.types[base.id] == STACK else FLOAT
         if isinstance(node, ast.BinOp):
             if not isinstance(node.op, _BINARY):
                 self.fail(node, f"operator {type(node.op).__name__} is not supported")
@@ -323,6 +333,10 @@ class _Checker(ast.NodeVisitor):
             if kinds:
                 self.fail(node, "point() takes no arguments (its length is D)")
             return POINT
+        if name == "stack":
+            if kinds:
+                self.fail(node, f"stack() takes no arguments (its length is {STACK_DEPTH})")
+            return STACK
         if name == "range":
             self.fail(node, "range() can only appear in a for loop")
         if name in self.callees:
@@ -448,12 +462,19 @@ class _Printer(ast.NodeTransformer):
             if self.dialect == "cuda":
                 return ast.parse(f"cuda.local.array({self.dim}, {self.float_name})", mode="eval").body
             return ast.parse(f"np.empty({self.dim})", mode="eval").body
+        if name == "stack":
+            if self.dialect == "warp":
+                return ast.Call(ast.Name("Stack"), [], [])
+            if self.dialect == "cuda":
+                return ast.parse(f"cuda.local.array({STACK_DEPTH}, int32)", mode="eval").body
+            return ast.parse(f"np.empty({STACK_DEPTH}, np.int64)", mode="eval").body
         return ast.Call(func, [self.visit(a) for a in node.args], [])
 
     def visit_Assign(self, node):
         target = node.targets[0]
         value = self.float_value_for(target, node.value)
-        if self.warp and isinstance(value, ast.Constant) and type(value.value) is int:
+        bare = value.operand if isinstance(value, ast.UnaryOp) and isinstance(value.op, ast.USub) else value
+        if self.warp and isinstance(bare, ast.Constant) and type(bare.value) is int:
             # Warp treats a name bound to a bare constant as a constant, which a dynamic loop
             # may not change (``n = 0`` then ``n += 1`` in the loop); int(0) makes a variable.
             value = ast.Call(ast.Name("int"), [value], [])
@@ -468,7 +489,10 @@ class _Printer(ast.NodeTransformer):
         return ast.AugAssign(self.visit(target), node.op, value)
 
     def float_value_for(self, target, value):
-        wants_float = isinstance(target, ast.Subscript) or self.types.get(getattr(target, "id", None)) == FLOAT
+        if isinstance(target, ast.Subscript):
+            wants_float = self.types.get(target.value.id) == POINT
+        else:
+            wants_float = self.types.get(target.id) == FLOAT
         return self.printed_float(value) if wants_float else self.visit(value)
 
     def visit_Return(self, node):

@@ -17,7 +17,6 @@ import textwrap
 import numpy as np
 
 from ..errors import KernelError
-from . import library
 from .language import Kernel
 
 #: Name of the entry function every compiled module exposes.
@@ -36,19 +35,37 @@ class Program:
     def __init__(self, dim: int):
         self.dim = int(dim)
         self.kernels: dict[str, Kernel] = {}
-        self.params: list[float] = []
+        self._chunks: list[np.ndarray] = []  # the parameters, as (k,) float64 pieces in order
+        self._size = 0
         self._shapes: dict[int, str] = {}
         self._defined = 0
 
     # ------------------------------------------------------------------ building
     def add_params(self, values) -> int:
         """Append float values to the parameter array; returns the offset of the first."""
-        offset = len(self.params)
-        self.params.extend(float(v) for v in np.ravel(np.asarray(values, dtype=np.float64)))
+        # Kept as arrays: a mesh adds millions of numbers, which a list of floats would hold slowly.
+        chunk = np.array(values, dtype=np.float64).ravel()
+        offset = self._size
+        self._chunks.append(chunk)
+        self._size += chunk.size
         return offset
 
+    @property
+    def next_offset(self) -> int:
+        """The offset the next :meth:`add_params` returns (for blocks that hold absolute offsets)."""
+        return self._size
+
+    @property
+    def params(self) -> np.ndarray:
+        """(k,) float64: every parameter added so far."""
+        return np.concatenate(self._chunks) if self._chunks else np.zeros(0)
+
     def use(self, fn) -> str:
-        """Add a library function (and the library functions it calls); returns its name."""
+        """Add a library function (and the functions of its module it calls); returns its name.
+
+        Library functions live in :mod:`ndpack.kernels.library` or in another module of kernel
+        functions (the mesh queries, for example); a call resolves within the caller's module.
+        """
         name = fn.__name__
         if name not in self.kernels:
             # The names it calls (from the syntax tree, so a longer name such as rounded_box
@@ -56,7 +73,7 @@ class Program:
             tree = ast.parse(textwrap.dedent(inspect.getsource(fn)))
             called = {node.func.id for node in ast.walk(tree)
                       if isinstance(node, ast.Call) and isinstance(node.func, ast.Name)}
-            for other in library.__dict__.values():
+            for other in list(fn.__globals__.values()):
                 if inspect.isfunction(other) and other is not fn and other.__name__ in called:
                     self.use(other)
             self.kernels[name] = Kernel(fn, callees=self.kernels)
@@ -101,7 +118,8 @@ class Program:
 
     def param_array(self, dtype=np.float64) -> np.ndarray:
         """(k,) the flat parameters; never empty (some compilers reject empty arrays)."""
-        return np.array(self.params or [0.0], dtype=dtype)
+        params = self.params
+        return (params if params.size else np.zeros(1)).astype(dtype)
 
 
 def shape_free(dim: int) -> Program:

@@ -13,6 +13,7 @@ from .csg import (
     Union,
 )
 from .plugin import Function, plugin
+from .mesh import TriangleMesh
 from .polygon import Polygon
 from .scalar import ScalarFunction, scalar_plugin
 from .primitives import (
@@ -33,5 +34,5 @@ __all__ = [
     "Ball", "Box", "Capsule", "Complement", "ConvexPolytope", "Cylinder", "Difference",
     "Ellipsoid", "Function", "HalfSpace", "Intersection", "Offset", "Polygon", "Rotate",
     "RoundedBox", "Scale", "ScalarFunction", "Shell", "Simplex", "Slab", "SmoothUnion", "Torus",
-    "Translate", "Union", "plugin", "scalar_plugin",
+    "Translate", "TriangleMesh", "Union", "plugin", "scalar_plugin",
 ]

@@ -1,0 +1,1 @@
+"""Triangle meshes: a bounding-volume hierarchy, its kernels, and the surface checks behind the mesh oracle."""

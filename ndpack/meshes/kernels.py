@@ -1,0 +1,224 @@
+"""Triangle-mesh distance queries, written once in the kernel language.
+
+These functions compile like every shape's kernel (:mod:`ndpack.kernels.language`): with Numba for
+the CPU (which the mesh oracle's own NumPy-facing methods use too), as CUDA device functions, and
+for Warp. ``D`` is 3. The mesh lives in the flat parameter array ``prm`` from offset ``o``, in
+coordinates normalised to the unit box around the mesh (so float32 keeps its precision); see
+:func:`ndpack.meshes.layout.pack_mesh` for the layout, summarised here:
+
+- header ``prm[o : o + HEADER]``: node count, sign method (0 pseudo-normals, 1 winding number),
+  scale ``s``, centre ``c`` (3), far-field ratio squared, then the absolute offsets of the node,
+  triangle and winding blocks. A user point ``x`` is queried as ``q = (x - c) / s``.
+- node ``k`` (``NODE`` floats): box lower (3), box upper (3), ``first``, ``count`` as in
+  :mod:`ndpack.meshes.bvh`.
+- triangle ``k`` (``TRIANGLE`` floats, in leaf order): vertices a, b, c (9), then the
+  angle-weighted pseudo-normals of its face (3), edges ab, bc, ca (9) and vertices a, b, c (9).
+- winding data of node ``k`` (``WINDING`` floats): area vector (3), area centroid (3), radius.
+"""
+
+# ruff: noqa: F821  (stack and point are supplied when a kernel is printed)
+
+import math
+
+HEADER = 10
+NODE = 8
+TRIANGLE = 30
+WINDING = 7
+
+
+# [node box lower (3), upper (3)] at b: squared distance from q to the box (0 inside).
+def box_squared_distance(q, prm, b: int):
+    s = 0.0
+    for i in range(3):
+        t = max(prm[b + i] - q[i], q[i] - prm[b + 3 + i], 0.0)
+        s += t * t
+    return s
+
+
+# [triangle at t]: the closest point of the triangle to q (Ericson's regions), then by ``want``:
+# 0 its squared distance, 1 the offset q - closest along the pseudo-normal of the feature it
+# lies on (negative inside a closed, outward-oriented mesh), 2, 3, 4 its x, y, z coordinate.
+def triangle_query(q, prm, t: int, want: int):
+    abx = prm[t + 3] - prm[t]
+    aby = prm[t + 4] - prm[t + 1]
+    abz = prm[t + 5] - prm[t + 2]
+    acx = prm[t + 6] - prm[t]
+    acy = prm[t + 7] - prm[t + 1]
+    acz = prm[t + 8] - prm[t + 2]
+    apx = q[0] - prm[t]
+    apy = q[1] - prm[t + 1]
+    apz = q[2] - prm[t + 2]
+    d1 = abx * apx + aby * apy + abz * apz
+    d2 = acx * apx + acy * apy + acz * apz
+    bpx = q[0] - prm[t + 3]
+    bpy = q[1] - prm[t + 4]
+    bpz = q[2] - prm[t + 5]
+    d3 = abx * bpx + aby * bpy + abz * bpz
+    d4 = acx * bpx + acy * bpy + acz * bpz
+    cpx = q[0] - prm[t + 6]
+    cpy = q[1] - prm[t + 7]
+    cpz = q[2] - prm[t + 8]
+    d5 = abx * cpx + aby * cpy + abz * cpz
+    d6 = acx * cpx + acy * cpy + acz * cpz
+    vc = d1 * d4 - d3 * d2
+    vb = d5 * d2 - d1 * d6
+    va = d3 * d6 - d5 * d4
+    # The closest point is a + v * ab + w * ac, on the feature whose pseudo-normal is at n.
+    v = 0.0
+    w = 0.0
+    n = t + 21
+    if d1 <= 0.0 and d2 <= 0.0:
+        n = t + 21
+    elif d3 >= 0.0 and d4 <= d3:
+        v = 1.0
+        n = t + 24
+    elif vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+        v = d1 / (d1 - d3) if d1 > d3 else 0.0
+        n = t + 12
+    elif d6 >= 0.0 and d5 <= d6:
+        w = 1.0
+        n = t + 27
+    elif vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+        w = d2 / (d2 - d6) if d2 > d6 else 0.0
+        n = t + 18
+    elif va <= 0.0 and d4 - d3 >= 0.0 and d5 - d6 >= 0.0:
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6)) if (d4 - d3) + (d5 - d6) > 0.0 else 0.0
+        v = 1.0 - w
+        n = t + 15
+    elif va + vb + vc > 0.0:
+        v = vb / (va + vb + vc)
+        w = vc / (va + vb + vc)
+        n = t + 9
+    ox = apx - v * abx - w * acx
+    oy = apy - v * aby - w * acy
+    oz = apz - v * abz - w * acz
+    if want == 0:
+        return ox * ox + oy * oy + oz * oz
+    if want == 1:
+        return ox * prm[n] + oy * prm[n + 1] + oz * prm[n + 2]
+    if want == 2:
+        return q[0] - ox
+    if want == 3:
+        return q[1] - oy
+    return q[2] - oz
+
+
+# The triangle nearest to q closer than sqrt(limit) (squared, normalised units), or -1.
+# Closest child first, so the best distance shrinks early and prunes most of the tree.
+def mesh_nearest_triangle(q, prm, o: int, limit: float):
+    nodes = int(prm[o + 7])
+    triangles = int(prm[o + 8])
+    best = limit
+    found = -1
+    pending = stack()
+    pending[0] = 0
+    top = 1
+    while top > 0:
+        top -= 1
+        node = pending[top]
+        b = nodes + 8 * node
+        if box_squared_distance(q, prm, b) >= best:
+            continue
+        count = int(prm[b + 7])
+        if count > 0:
+            start = int(prm[b + 6])
+            for k in range(start, start + count):
+                d = triangle_query(q, prm, triangles + 30 * k, 0)
+                if d < best:
+                    best = d
+                    found = k
+        else:
+            left = node + 1
+            right = int(prm[b + 6])
+            near_left = box_squared_distance(q, prm, nodes + 8 * left)
+            near_right = box_squared_distance(q, prm, nodes + 8 * right)
+            # Push the farther child first, so the nearer is visited next.
+            if near_left <= near_right:
+                if near_right < best:
+                    pending[top] = right
+                    top += 1
+                if near_left < best:
+                    pending[top] = left
+                    top += 1
+            else:
+                if near_left < best:
+                    pending[top] = left
+                    top += 1
+                if near_right < best:
+                    pending[top] = right
+                    top += 1
+    return found
+
+
+# The solid angle of triangle t seen from q (Van Oosterom and Strackee), positive where q sees
+# the triangle's back (inside an outward-oriented surface).
+def triangle_solid_angle(q, prm, t: int):
+    ax = prm[t] - q[0]
+    ay = prm[t + 1] - q[1]
+    az = prm[t + 2] - q[2]
+    bx = prm[t + 3] - q[0]
+    by = prm[t + 4] - q[1]
+    bz = prm[t + 5] - q[2]
+    cx = prm[t + 6] - q[0]
+    cy = prm[t + 7] - q[1]
+    cz = prm[t + 8] - q[2]
+    la = math.sqrt(ax * ax + ay * ay + az * az)
+    lb = math.sqrt(bx * bx + by * by + bz * bz)
+    lc = math.sqrt(cx * cx + cy * cy + cz * cz)
+    det = ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx)
+    den = la * lb * lc + (ax * bx + ay * by + az * bz) * lc + (ax * cx + ay * cy + az * cz) * lb
+    den += (bx * cx + by * cy + bz * cz) * la
+    return 2.0 * math.atan2(det, den)
+
+
+# The generalised winding number of the mesh at q (Barill et al. 2018, first order): a node far
+# from q (distance above ratio * radius) counts as one dipole, nearer ones open up.
+def mesh_winding_number(q, prm, o: int):
+    nodes = int(prm[o + 7])
+    triangles = int(prm[o + 8])
+    winding = int(prm[o + 9])
+    ratio_squared = prm[o + 6]
+    total = 0.0
+    pending = stack()
+    pending[0] = 0
+    top = 1
+    while top > 0:
+        top -= 1
+        node = pending[top]
+        w = winding + 7 * node
+        dx = prm[w + 3] - q[0]
+        dy = prm[w + 4] - q[1]
+        dz = prm[w + 5] - q[2]
+        r2 = dx * dx + dy * dy + dz * dz
+        if r2 > ratio_squared * prm[w + 6] * prm[w + 6]:
+            total += (prm[w] * dx + prm[w + 1] * dy + prm[w + 2] * dz) / (r2 * math.sqrt(r2))
+            continue
+        b = nodes + 8 * node
+        count = int(prm[b + 7])
+        if count > 0:
+            start = int(prm[b + 6])
+            for k in range(start, start + count):
+                total += triangle_solid_angle(q, prm, triangles + 30 * k)
+        else:
+            pending[top] = int(prm[b + 6])
+            pending[top + 1] = node + 1
+            top += 2
+    return total / (4.0 * math.pi)
+
+
+# The signed distance from p (user units) to the mesh at o: negative inside.
+def mesh_distance(p, prm, o: int):
+    scale = prm[o + 2]
+    q = point()
+    for i in range(3):
+        q[i] = (p[i] - prm[o + 3 + i]) / scale
+    k = int(mesh_nearest_triangle(q, prm, o, 1.0e30))
+    t = int(prm[o + 8]) + 30 * k
+    unsigned = math.sqrt(triangle_query(q, prm, t, 0)) * scale
+    if prm[o + 1] == 0.0:
+        if triangle_query(q, prm, t, 1) < 0.0:
+            return -unsigned
+        return unsigned
+    if mesh_winding_number(q, prm, o) > 0.5:
+        return -unsigned
+    return unsigned

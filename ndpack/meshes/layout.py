@@ -1,0 +1,143 @@
+"""A triangle mesh as the flat parameter block its kernels read (:mod:`ndpack.meshes.kernels`)."""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from . import bvh
+from .kernels import HEADER, NODE, TRIANGLE, WINDING
+
+#: Sign methods, as stored in the header.
+SIGN_CODES = {"pseudonormal": 0.0, "winding": 1.0}
+#: A tree node counts as one dipole in the winding number when the query point is farther than
+#: this many node radii from its centre (Barill et al. use 2; the first-order error is then a few
+#: thousandths, far from the 0.5 threshold except next to holes).
+FAR_FIELD_RATIO = 2.0
+
+
+def pseudo_normals(vertices: np.ndarray, faces: np.ndarray):
+    """Angle-weighted pseudo-normals (Baerentzen and Aanaes 2005) of an indexed mesh.
+
+    Parameters
+    ----------
+    vertices : (v, 3) float64
+    faces : (f, 3) int64, consistently oriented
+
+    Returns
+    -------
+    face_normals : (f, 3) float64
+        Unit normals.
+    edge_normals : (f, 3, 3) float64
+        Per face, the sum of the normals of the faces sharing its edges ab, bc, ca.
+    vertex_normals : (f, 3, 3) float64
+        Per face, the angle-weighted sum of normals around its vertices a, b, c.
+    """
+    corners = vertices[faces]  # (f, 3, 3)
+    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    face_normals = cross / np.linalg.norm(cross, axis=1, keepdims=True)
+
+    # Interior angle at each corner.
+    after = np.roll(corners, -1, axis=1) - corners
+    before = np.roll(corners, 1, axis=1) - corners
+    cosine = np.einsum("fki,fki->fk", after, before)
+    cosine /= np.linalg.norm(after, axis=2) * np.linalg.norm(before, axis=2)
+    angles = np.arccos(np.clip(cosine, -1.0, 1.0))
+    around_vertex = np.zeros_like(vertices)
+    np.add.at(around_vertex, faces.ravel(), (angles[:, :, None] * face_normals[:, None, :]).reshape(-1, 3))
+
+    edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    _, edge_ids = np.unique(edges, axis=0, return_inverse=True)
+    edge_ids = edge_ids.ravel()
+    around_edge = np.zeros((edge_ids.max() + 1, 3))
+    np.add.at(around_edge, edge_ids, np.repeat(face_normals, 3, axis=0))
+    return face_normals, around_edge[edge_ids].reshape(-1, 3, 3), around_vertex[faces]
+
+
+def pack_mesh(vertices: np.ndarray, faces: np.ndarray, sign: str) -> np.ndarray:
+    """The parameter block of a mesh, with offsets counted from the block's start.
+
+    Parameters
+    ----------
+    vertices : (v, 3) float64
+    faces : (f, 3) int64
+        A cleaned mesh (no degenerate faces), outward oriented where it is closed.
+    sign : "pseudonormal" or "winding"
+
+    Returns
+    -------
+    block : (k,) float64
+        Header, nodes, triangles and winding data (layout in :mod:`ndpack.meshes.kernels`).
+        :func:`relocate` shifts its offsets when it is placed elsewhere in a larger array.
+    order : (f,) int64
+        The row of ``faces`` of each triangle in the block (leaf order).
+    """
+    lower, upper = vertices.min(axis=0), vertices.max(axis=0)
+    center = 0.5 * (lower + upper)
+    scale = 0.5 * float((upper - lower).max())
+    unit = (vertices - center) / scale
+    triangles = unit[faces]
+    tree = bvh.build(triangles)
+    order = tree.order
+    face_normals, edge_normals, vertex_normals = pseudo_normals(unit, faces)
+
+    triangle_block = np.concatenate([
+        triangles[order].reshape(-1, 9), face_normals[order],
+        edge_normals[order].reshape(-1, 9), vertex_normals[order].reshape(-1, 9),
+    ], axis=1)
+    node_block = np.concatenate([tree.lower, tree.upper, tree.first[:, None], tree.count[:, None]], axis=1)
+    winding_block = _winding_data(triangles[order], tree.lower, tree.upper, tree.first, tree.count)
+
+    n_nodes = tree.n_nodes
+    nodes_at = HEADER
+    triangles_at = nodes_at + NODE * n_nodes
+    winding_at = triangles_at + TRIANGLE * len(faces)
+    header = np.array([n_nodes, SIGN_CODES[sign], scale, *center, FAR_FIELD_RATIO**2,
+                       nodes_at, triangles_at, winding_at])
+    assert header.size == HEADER and node_block.shape[1] == NODE
+    assert triangle_block.shape[1] == TRIANGLE and winding_block.shape[1] == WINDING
+    block = np.concatenate([header, node_block.ravel(), triangle_block.ravel(), winding_block.ravel()])
+    return block, order
+
+
+def relocate(block: np.ndarray, offset: int) -> np.ndarray:
+    """A copy of ``block`` whose internal offsets are absolute once placed at ``offset``."""
+    block = block.copy()
+    block[7:10] += offset
+    return block
+
+
+@numba.njit(cache=True)
+def _winding_data(triangles, lower, upper, first, count):
+    """(m, 7): per node, area vector, area-weighted centroid and a radius enclosing its triangles."""
+    n_nodes = len(first)
+    data = np.zeros((n_nodes, 7))
+    area = np.zeros(n_nodes)
+    for k in range(n_nodes - 1, -1, -1):  # children have larger indices than their parent
+        if count[k] > 0:
+            for j in range(first[k], first[k] + count[k]):
+                a, b, c = triangles[j, 0], triangles[j, 1], triangles[j, 2]
+                vector = 0.5 * np.cross(b - a, c - a)
+                size = np.sqrt(np.sum(vector * vector))
+                data[k, 0:3] += vector
+                data[k, 3:6] += size * (a + b + c) / 3.0
+                area[k] += size
+        else:
+            for child in (k + 1, first[k]):
+                data[k, 0:3] += data[child, 0:3]
+                data[k, 3:6] += area[child] * data[child, 3:6]
+                area[k] += area[child]
+        if area[k] > 0.0:
+            data[k, 3:6] /= area[k]
+        else:
+            data[k, 3:6] = 0.5 * (lower[k] + upper[k])
+        # The farthest box corner bounds the distance to every vertex in the node.
+        radius = 0.0
+        for corner in range(8):
+            s = 0.0
+            for i in range(3):
+                x = upper[k, i] if (corner >> i) & 1 else lower[k, i]
+                s += (x - data[k, 3 + i]) ** 2
+            radius = max(radius, np.sqrt(s))
+        data[k, 6] = radius
+    return data

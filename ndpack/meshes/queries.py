@@ -1,0 +1,115 @@
+"""Mesh queries on the CPU: the kernel-language functions compiled by Numba, parallel over points.
+
+What the mesh oracle's NumPy-facing methods (and so the numpy backend) call. The traversal is the
+one the compiled backends run (:mod:`ndpack.meshes.kernels`); this module only loops over points.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from ..kernels.compile import PARALLEL_FROM, numba_namespace
+from ..kernels.program import Program
+from . import kernels
+
+_LOOPS = '''
+def signed_all(points, prm, out):
+    for i in prange(points.shape[0]):
+        out[i] = mesh_distance(points[i], prm, 0)
+
+
+def closest_all(points, prm, limit, sign, out_distance, out_closest, out_triangle):
+    scale = prm[2]
+    for i in prange(points.shape[0]):
+        q = np.empty(3)
+        for j in range(3):
+            q[j] = (points[i, j] - prm[3 + j]) / scale
+        k = int(mesh_nearest_triangle(q, prm, 0, (limit / scale) ** 2))
+        out_triangle[i] = k
+        if k < 0:
+            out_distance[i] = limit
+            continue
+        t = int(prm[8]) + 30 * k
+        unsigned = np.sqrt(triangle_query(q, prm, t, 0)) * scale
+        for j in range(3):
+            out_closest[i, j] = triangle_query(q, prm, t, 2 + j) * scale + prm[3 + j]
+        inside = False
+        if sign == 1:
+            inside = triangle_query(q, prm, t, 1) < 0.0
+        elif sign == 2:
+            inside = mesh_winding_number(q, prm, 0) > 0.5
+        out_distance[i] = -unsigned if inside else unsigned
+
+
+def winding_all(points, prm, out):
+    scale = prm[2]
+    for i in prange(points.shape[0]):
+        q = np.empty(3)
+        for j in range(3):
+            q[j] = (points[i, j] - prm[3 + j]) / scale
+        out[i] = mesh_winding_number(q, prm, 0)
+'''
+
+
+@functools.cache
+def _namespace():
+    """The compiled loops, one parallel and one serial version of each (compiled once a process)."""
+    import numba
+
+    program = Program(3)
+    for function in (kernels.mesh_distance, kernels.mesh_nearest_triangle, kernels.triangle_query,
+                     kernels.mesh_winding_number):
+        program.use(function)
+    serial = _LOOPS.replace("def ", "def serial_").replace("serial_mesh", "mesh")
+
+    def jit(namespace, names):
+        namespace["prange"] = numba.prange
+        for name in names:
+            parallel = not name.startswith("serial_")
+            namespace[name] = numba.njit(parallel=parallel, cache=False)(namespace[name])
+
+    return numba_namespace(program, "cpu", _LOOPS + serial, {}, jit)
+
+
+def _run(name: str, points: np.ndarray, *args):
+    namespace = _namespace()
+    loop = namespace[name if len(points) >= PARALLEL_FROM else f"serial_{name}"]
+    loop(np.ascontiguousarray(points, dtype=np.float64), *args)
+
+
+def signed_distance(block: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(n,) signed distances of ``points`` (n, 3) to the mesh packed in ``block`` (its own offsets)."""
+    out = np.empty(len(points))
+    _run("signed_all", points, block, out)
+    return out
+
+
+def closest(block: np.ndarray, points: np.ndarray, limit: float = np.inf, sign: str | None = None):
+    """Nearest surface points of ``points`` (n, 3) within ``limit``.
+
+    Returns
+    -------
+    distance : (n,) float64
+        Unsigned (``sign=None``) or signed by ``"pseudonormal"`` or ``"winding"``; ``limit``
+        where no triangle is within ``limit``.
+    closest : (n, 3) float64
+        Nearest points (NaN where none is within ``limit``).
+    triangle : (n,) int64
+        The nearest triangle in leaf order, or -1.
+    """
+    n = len(points)
+    distance, closest_points = np.empty(n), np.full((n, 3), np.nan)
+    triangle = np.empty(n, dtype=np.int64)
+    limit = min(float(limit), 1e30)
+    code = {None: 0, "pseudonormal": 1, "winding": 2}[sign]
+    _run("closest_all", points, block, limit, code, distance, closest_points, triangle)
+    return distance, closest_points, triangle
+
+
+def winding_number(block: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(n,) generalised winding numbers of ``points`` (n, 3): 1 inside a closed outward mesh, 0 outside."""
+    out = np.empty(len(points))
+    _run("winding_all", points, block, out)
+    return out
