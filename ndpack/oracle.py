@@ -243,23 +243,42 @@ class Oracle:
         return f"{type(self).__name__}(dim={self.dim})"
 
     # ------------------------------------------------------------------ CSG
+    # Operands may be other libraries' shapes (manifold3d, trimesh, shapely): see as_oracle.
     def union(self, *others: Oracle) -> Oracle:
+        from .shapes.adapters import as_oracle
         from .shapes.csg import Union
 
-        return Union(self, *others)
+        return Union(self, *map(as_oracle, others))
 
     def intersection(self, *others: Oracle) -> Oracle:
+        from .shapes.adapters import as_oracle
         from .shapes.csg import Intersection
 
-        return Intersection(self, *others)
+        return Intersection(self, *map(as_oracle, others))
 
     def difference(self, *others: Oracle) -> Oracle:
+        from .shapes.adapters import as_oracle
         from .shapes.csg import Difference
 
         result = self
         for other in others:
-            result = Difference(result, other)
+            result = Difference(result, as_oracle(other))
         return result
+
+    def __ror__(self, other) -> Oracle:
+        from .shapes.adapters import as_oracle
+
+        return as_oracle(other).union(self)
+
+    def __rand__(self, other) -> Oracle:
+        from .shapes.adapters import as_oracle
+
+        return as_oracle(other).intersection(self)
+
+    def __rsub__(self, other) -> Oracle:
+        from .shapes.adapters import as_oracle
+
+        return as_oracle(other).difference(self)
 
     def complement(self) -> Oracle:
         from .shapes.csg import Complement

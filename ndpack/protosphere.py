@@ -31,6 +31,7 @@ from .backends import get_backend
 from .backends.prototypes import best_starts
 from .errors import ParameterError, ShapeError
 from .oracle import Oracle, ball_volume, check_compatible, check_packable
+from .shapes.adapters import as_oracle
 from .packing import Packing, RoundStats
 from .verify import verify
 
@@ -312,6 +313,7 @@ def pack(
         Verified in float64: every sphere inside ``shape`` and no two overlapping. An interrupted
         run (Ctrl-C) returns what it packed so far, with ``stop_reason == "interrupted"``.
     """
+    shape = as_oracle(shape)
     check_compatible(shape)
     _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts)
     check_packable(shape)

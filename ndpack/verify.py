@@ -140,6 +140,9 @@ def verify(packing, shape=None, tol: float | None = None, radii=None) -> Verific
         centers = packing
     if shape is None:
         raise NdpackError("verify() needs the shape: pass verify(packing, shape)")
+    from .shapes.adapters import as_oracle
+
+    shape = as_oracle(shape)
     centers = as_points(centers, shape.dim) if len(centers) else np.zeros((0, shape.dim))
     radii = np.asarray(radii, dtype=np.float64)
     if radii.shape != (len(centers),):

@@ -146,8 +146,12 @@ class Polygon(Oracle):
                     "outside"
                 )
 
-        self._area = abs(areas[0]) - sum(abs(a) for a in areas[1:])
-        rings = [self.outer, *self.holes]
+        self._setup([self.outer, *self.holes], abs(areas[0]) - sum(abs(a) for a in areas[1:]))
+
+    def _setup(self, rings, area: float):
+        """Edge arrays of oriented ``rings`` (region on the left of every edge) and the area."""
+        self._area = area
+        self._rings = tuple(rings)
         self._start = np.ascontiguousarray(np.concatenate(rings))
         ends = [np.roll(ring, -1, axis=0) for ring in rings]
         self._end = np.ascontiguousarray(np.concatenate(ends))
@@ -155,9 +159,50 @@ class Polygon(Oracle):
         self._edge = edge
         self._inv_length2 = 1.0 / np.einsum("ij,ij->i", edge, edge)
         self._normal = edge[:, ::-1] * np.array([1.0, -1.0]) * np.sqrt(self._inv_length2)[:, None]
-        self._bounds = np.array([self.outer.min(axis=0), self.outer.max(axis=0)])
+        self._bounds = np.array([self._start.min(axis=0), self._start.max(axis=0)])
         for ring in rings:  # the edges were computed from them: changing them would do nothing
             ring.flags.writeable = False
+
+    @classmethod
+    def from_rings(cls, rings) -> Polygon:
+        """A region bounded by any number of non-crossing rings: islands, holes, islands in holes.
+
+        What is inside follows the even-odd rule: a ring inside an odd number of other rings is a
+        hole. This is how manifold3d cross-sections and shapely multipolygons come in.
+
+        Parameters
+        ----------
+        rings : sequence of (m, 2) array_like
+            In any orientation and order.
+
+        Notes
+        -----
+        ``outer`` is then the largest island, ``holes`` every other ring (holes and further islands).
+        """
+        rings = [_as_ring(ring, f"ring {i}") for i, ring in enumerate(rings)]
+        if not rings:
+            raise ShapeError("a polygon needs at least one ring")
+        areas = np.array([_signed_area(ring) for ring in rings])
+        extent = max(float(np.ptp(ring, axis=0).max()) for ring in rings)
+        if np.any(np.abs(areas) <= 1e-12 * extent**2):
+            raise ShapeError(f"ring {int(np.argmin(np.abs(areas)))} has zero area: its vertices are all on one line")
+        # Nesting depth of each ring: how many other rings hold its first vertex.
+        depth = np.zeros(len(rings), dtype=int)
+        for j, other in enumerate(rings):
+            firsts = np.array([ring[0] for i, ring in enumerate(rings) if i != j])
+            if len(firsts):
+                inside = _crossing_parity(firsts, other, np.roll(other, -1, axis=0))
+                depth[[i for i in range(len(rings)) if i != j]] += inside
+        hole = depth % 2 == 1
+        # Islands counter-clockwise, holes clockwise: the region is on the left of every edge.
+        oriented = [ring if (area > 0) != is_hole else ring[::-1].copy()
+                    for ring, area, is_hole in zip(rings, areas, hole)]
+        polygon = cls.__new__(cls)
+        largest = int(np.argmax(np.where(hole, -np.inf, np.abs(areas))))
+        polygon.outer = oriented[largest]
+        polygon.holes = tuple(ring for i, ring in enumerate(oriented) if i != largest)
+        polygon._setup([polygon.outer, *polygon.holes], float(np.sum(np.where(hole, -1, 1) * np.abs(areas))))
+        return polygon
 
     @classmethod
     def regular(cls, n_sides: int, radius: float = 1.0, center=(0, 0)) -> Polygon:
@@ -249,7 +294,7 @@ class Polygon(Oracle):
     def _kernel(self, program):
         # Ring count and vertex counts first, then the vertices: the program text is the same
         # for every polygon (the loops read the counts from the parameters).
-        rings = [self.outer, *self.holes]
+        rings = list(self._rings)
         values = [len(rings), *(len(ring) for ring in rings), *np.concatenate(rings).ravel()]
         offset = program.add_params(values)
         return program.define(f"def _(p, prm):\n    return {program.use(library.polygon)}(p, prm, {offset})\n")
