@@ -108,3 +108,16 @@ def test_trimesh_objects_are_meshes():
     points = points_in([-0.5, -1, -1.5], [0.5, 1, 1.5], seed=4)
     np.testing.assert_allclose(mesh.distance(points), nd.Box([-0.5, -1, -1.5], [0.5, 1, 1.5]).distance(points),
                                atol=1e-12)
+
+
+def test_manifold_part_example_packs_at_small_size():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).parent.parent / "examples" / "manifold_part.py"
+    spec = importlib.util.spec_from_file_location("manifold_part", path)
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    shape = example.part(segments=16) - nd.HalfSpace([0, 0, -1], -1.4)
+    packing = nd.pack(shape, n=30, seed=0, backend="numpy", progress=False)
+    assert packing.verify().ok and packing.radii[0] == pytest.approx(0.7, rel=1e-3)  # half the trimmed height

@@ -26,6 +26,14 @@ class Backend:
 
     name = "base"
 
+    def distance(self, shape, points) -> np.ndarray:
+        """The shape's signed distance at ``points`` (n, d), evaluated by this backend: (n,) float64.
+
+        What a user measures a backend's oracle speed with; the packing loops call the shape's
+        kernel inside their own kernels instead.
+        """
+        return shape._distance(np.ascontiguousarray(points, dtype=np.float64))
+
     def clearance(self, shape, points, centers, radii, neighbours) -> np.ndarray:
         """Clearance of each point.
 

@@ -22,6 +22,11 @@ def clearance_all(points, prm, centers, radii, nbr, out, out_direction):
         clearance_one(i, points, prm, centers, radii, nbr, out, out_direction)
 
 
+def distance_all(points, prm, out):
+    for i in prange(points.shape[0]):
+        out[i] = sd(points[i], prm)
+
+
 def converge_all(points, lower, upper, prm, centers, radii, nbr, steps, out_points, out_clearance):
     for i in prange(points.shape[0]):
         converge_one(i, points, lower, upper, prm, centers, radii, nbr, steps, out_points, out_clearance)
@@ -45,7 +50,7 @@ def touched_all(points, clearance, centers, radii, out):
 #: Central-difference step, as a fraction of the shape's scale: float64 rounding in the
 #: difference is about 1e-16 / 1e-6 of the gradient, truncation about 1e-12 for unit curvature.
 FD_STEP = 1e-6
-ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all")
+ENTRY_NAMES = ("distance_all", "clearance_all", "converge_all", "near_count", "near_fill", "touched_all")
 
 
 def _jit(namespace, names):
@@ -102,6 +107,12 @@ class NumbaBackend(Backend):
         self._run(namespace["clearance_all"], _f64(points), params, _f64(centers), _f64(radii),
                   _i64(neighbours), out, out_direction)
         return out, out_direction
+
+    def distance(self, shape, points):
+        namespace, params = self._kernels(shape)
+        out = np.empty(len(points))
+        self._run(namespace["distance_all"], _f64(points), params, out)
+        return out
 
     def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
         namespace, params = self._kernels(shape)

@@ -27,6 +27,12 @@ def clearance_all(points, prm, centers, radii, nbr, out, out_direction):
         clearance_one(i, points, prm, centers, radii, nbr, out, out_direction)
 
 
+def distance_all(points, prm, out):
+    i = cuda.grid(1)
+    if i < points.shape[0]:
+        out[i] = sd(points[i], prm)
+
+
 def converge_all(points, lower, upper, prm, centers, radii, nbr, steps, out_points, out_clearance):
     i = cuda.grid(1)
     if i < points.shape[0]:
@@ -150,7 +156,7 @@ def move_ids(ids, starts, tries, points, clearance, polished, lower, upper, prm,
         move_one(b, ids, starts, tries, points, clearance, polished, lower, upper, prm, centers, radii, nbr,
                  steps, polish)
 '''
-ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
+ENTRY_NAMES = ("distance_all", "clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
                "select_all", "max_all", "touched_select", "gather_ids", "near_bound_ids", "near_fill_ids", "near_finish", "move_ids")
 THREADS_PER_BLOCK = 128
 
@@ -235,6 +241,12 @@ class NumbaCudaBackend(Backend):
         self._launch(namespace["clearance_all"], len(points), self.cuda.to_device(_f64(points)), params,
                      d_centers, d_radii, table, out, out_direction)
         return out.copy_to_host()[: len(points)], out_direction.copy_to_host()
+
+    def distance(self, shape, points):
+        namespace, params = self._kernels(shape)
+        out = self.cuda.device_array(max(len(points), 1), dtype=np.float64)
+        self._launch(namespace["distance_all"], len(points), self.cuda.to_device(_f64(points)), params, out)
+        return out.copy_to_host()[: len(points)]
 
     def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
         namespace, params = self._kernels(shape)

@@ -143,6 +143,14 @@ class WarpBackend(Backend):
         direction = out_direction.numpy().reshape(-1, shape.dim).astype(np.float64)
         return out.numpy().astype(np.float64), direction
 
+    def distance(self, shape, points):
+        module, params, _ = self._module(shape)
+        out = self.wp.empty(len(points), dtype=module.F, device=self.device)
+        if len(points):
+            self.wp.launch(module.distance_all, dim=len(points), device=self.device,
+                           inputs=[self._points(module, points), params, out])
+        return out.numpy().astype(np.float64)
+
     def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
         module, params, h = self._module(shape)
         d_centers, d_radii, table = self._spheres_and_table(module, centers, radii, neighbours)

@@ -57,6 +57,12 @@ def free_space(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), r
 
 
 @wp.kernel
+def distance_all(points: wp.array(dtype=VecD), prm: wp.array(dtype=F), out: wp.array(dtype=F)):
+    i = wp.tid()
+    out[i] = sd(points[i], prm)
+
+
+@wp.kernel
 def clearance_all(points: wp.array(dtype=VecD), prm: wp.array(dtype=F), centers: wp.array(dtype=VecD),
                   radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32), h: F, out: wp.array(dtype=F),
                   out_direction: wp.array(dtype=VecD)):
