@@ -187,7 +187,7 @@ def main():
         results["meshes"].append({"mesh": label, "triangles": mesh.n_triangles, "ndpack_build_s": build,
                                   "sign_method": mesh.sign_method, "rows": rows})
         print(f"\n{label}: {mesh.n_triangles:,} triangles, ndpack build {build:.2f} s (sign: {mesh.sign_method})")
-        print(f"| engine | device | build s | queries/s | max error / size |\n|---|---|---|---|---|")
+        print("| engine | device | build s | queries/s | max error / size |\n|---|---|---|---|---|")
         for row in rows:
             print(f"| {row['engine']} | {row['device']} | {row['build_s']:.3f} | {row['queries_per_s']:,.0f} | "
                   f"{row['max_error_relative']:.1e} |")

@@ -60,23 +60,28 @@ class Program:
         """(k,) float64: every parameter added so far."""
         return np.concatenate(self._chunks) if self._chunks else np.zeros(0)
 
-    def use(self, fn) -> str:
+    def use(self, fn, name: str | None = None) -> str:
         """Add a library function (and the functions of its module it calls); returns its name.
 
         Library functions live in :mod:`ndpack.kernels.library` or in another module of kernel
         functions (the mesh queries, for example); a call resolves within the caller's module.
+        ``name`` adds the function under another name, which code added later calls (how one
+        tree walk calls the triangle or the segment query, whichever the dimension needs).
         """
-        name = fn.__name__
+        name = name or fn.__name__
         if name not in self.kernels:
+            source = textwrap.dedent(inspect.getsource(fn))
             # The names it calls (from the syntax tree, so a longer name such as rounded_box
             # does not count as a call of box, nor does a name in a comment).
-            tree = ast.parse(textwrap.dedent(inspect.getsource(fn)))
+            tree = ast.parse(source)
             called = {node.func.id for node in ast.walk(tree)
                       if isinstance(node, ast.Call) and isinstance(node.func, ast.Name)}
             for other in list(fn.__globals__.values()):
                 if inspect.isfunction(other) and other is not fn and other.__name__ in called:
                     self.use(other)
-            self.kernels[name] = Kernel(fn, callees=self.kernels)
+            if name != fn.__name__:
+                source = source.replace(f"def {fn.__name__}(", f"def {name}(", 1)
+            self.kernels[name] = Kernel(source if name != fn.__name__ else fn, callees=self.kernels)
         return name
 
     def define(self, source: str) -> str:

@@ -1,4 +1,4 @@
-"""A bounding-volume hierarchy over triangles, built once as flat arrays.
+"""A bounding-volume hierarchy over triangles (3-D) or segments (2-D), built once as flat arrays.
 
 The traversal has to compile inside ndpack's scalar kernels (Numba CPU, Numba CUDA and Warp,
 :mod:`ndpack.meshes.queries`), which read plain parameter arrays; no mesh library exposes its tree
@@ -32,7 +32,7 @@ class Tree:
     ----------
     order : (n,) int64
         Triangle ids in leaf order.
-    lower, upper : (m, 3) float64
+    lower, upper : (m, d) float64
         Each node's box.
     first, count : (m,) int64
     """
@@ -54,22 +54,22 @@ class Tree:
         return int(depth.max())
 
 
-def build(triangles: np.ndarray) -> Tree:
-    """Build the hierarchy of ``triangles``, (n, 3, 3) float64 vertex coordinates."""
-    triangles = np.ascontiguousarray(triangles, dtype=np.float64)
-    if len(triangles) == 0:
-        raise ValueError("cannot build a hierarchy over no triangles")
-    return Tree(*_build(triangles.min(axis=1), triangles.max(axis=1), triangles.mean(axis=1),
+def build(elements: np.ndarray) -> Tree:
+    """Build the hierarchy of ``elements``: (n, 3, 3) triangles or (n, 2, 2) segments, float64."""
+    elements = np.ascontiguousarray(elements, dtype=np.float64)
+    if len(elements) == 0:
+        raise ValueError("cannot build a hierarchy over no elements")
+    return Tree(*_build(elements.min(axis=1), elements.max(axis=1), elements.mean(axis=1),
                         LEAF_SIZE, BINS, MAX_DEPTH))
 
 
 @numba.njit(cache=True)
 def _build(box_lower, box_upper, centroids, leaf_size, bins, max_depth):
-    n = len(centroids)
+    n, dim = centroids.shape
     order = np.arange(n)
     capacity = 2 * n
-    lower = np.empty((capacity, 3))
-    upper = np.empty((capacity, 3))
+    lower = np.empty((capacity, dim))
+    upper = np.empty((capacity, dim))
     first = np.zeros(capacity, dtype=np.int64)
     count = np.zeros(capacity, dtype=np.int64)
     # Pending ranges: begin, end, parent node (-1 for the root), depth. The right child is
@@ -79,8 +79,8 @@ def _build(box_lower, box_upper, centroids, leaf_size, bins, max_depth):
     top = 1
     nodes = 0
     bin_count = np.zeros(bins, dtype=np.int64)
-    bin_lower = np.empty((bins, 3))
-    bin_upper = np.empty((bins, 3))
+    bin_lower = np.empty((bins, dim))
+    bin_upper = np.empty((bins, dim))
     while top > 0:
         top -= 1
         begin, end, parent, depth = pending[top, 0], pending[top, 1], pending[top, 2], pending[top, 3]
@@ -88,14 +88,14 @@ def _build(box_lower, box_upper, centroids, leaf_size, bins, max_depth):
         nodes += 1
         if parent >= 0 and parent + 1 != node:
             first[parent] = node  # a right child
-        for i in range(3):
+        for i in range(dim):
             lower[node, i] = np.inf
             upper[node, i] = -np.inf
-        c_lower = np.full(3, np.inf)
-        c_upper = np.full(3, -np.inf)
+        c_lower = np.full(dim, np.inf)
+        c_upper = np.full(dim, -np.inf)
         for j in range(begin, end):
             t = order[j]
-            for i in range(3):
+            for i in range(dim):
                 lower[node, i] = min(lower[node, i], box_lower[t, i])
                 upper[node, i] = max(upper[node, i], box_upper[t, i])
                 c_lower[i] = min(c_lower[i], centroids[t, i])
@@ -116,7 +116,7 @@ def _build(box_lower, box_upper, centroids, leaf_size, bins, max_depth):
             t = order[j]
             b = min(int((centroids[t, axis] - c_lower[axis]) * scale), bins - 1)
             bin_count[b] += 1
-            for i in range(3):
+            for i in range(dim):
                 bin_lower[b, i] = min(bin_lower[b, i], box_lower[t, i])
                 bin_upper[b, i] = max(bin_upper[b, i], box_upper[t, i])
         best_cost = np.inf
@@ -124,19 +124,21 @@ def _build(box_lower, box_upper, centroids, leaf_size, bins, max_depth):
         for split in range(1, bins):
             cost = 0.0
             for side in range(2):
-                lo = np.full(3, np.inf)
-                hi = np.full(3, -np.inf)
+                lo = np.full(dim, np.inf)
+                hi = np.full(dim, -np.inf)
                 members = 0
                 start, stop = (0, split) if side == 0 else (split, bins)
                 for b in range(start, stop):
                     if bin_count[b] > 0:
                         members += bin_count[b]
-                        for i in range(3):
+                        for i in range(dim):
                             lo[i] = min(lo[i], bin_lower[b, i])
                             hi[i] = max(hi[i], bin_upper[b, i])
                 if members > 0:
                     e = hi - lo
-                    cost += members * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0])
+                    # Surface area in 3-D, perimeter in 2-D: how likely a query meets the box.
+                    size = e[0] + e[1] if dim == 2 else e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
+                    cost += members * size
             if cost < best_cost:
                 best_cost = cost
                 best_split = split

@@ -1,36 +1,60 @@
-"""Triangle-mesh distance queries, written once in the kernel language.
+"""Distance queries to triangle meshes (3-D) and outlines (2-D), written once in the kernel language.
 
 These functions compile like every shape's kernel (:mod:`ndpack.kernels.language`): with Numba for
-the CPU (which the mesh oracle's own NumPy-facing methods use too), as CUDA device functions, and
-for Warp. ``D`` is 3. The mesh lives in the flat parameter array ``prm`` from offset ``o``, in
-coordinates normalised to the unit box around the mesh (so float32 keeps its precision); see
-:func:`ndpack.meshes.layout.pack_mesh` for the layout, summarised here:
+the CPU (which the oracles' own NumPy-facing methods use too), as CUDA device functions, and for
+Warp. The surface lives in the flat parameter array ``prm`` from offset ``o``, in coordinates
+normalised to the unit box around it (so float32 keeps its precision); see
+:mod:`ndpack.meshes.layout` for how it is written, summarised here:
 
-- header ``prm[o : o + HEADER]``: node count, sign method (0 pseudo-normals, 1 winding number),
-  scale ``s``, centre ``c`` (3), far-field ratio squared, then the absolute offsets of the node,
-  triangle and winding blocks. A user point ``x`` is queried as ``q = (x - c) / s``.
-- node ``k`` (``NODE`` floats): box lower (3), box upper (3), ``first``, ``count`` as in
+- header ``prm[o : o + HEADER]``: node count, sign method (0 pseudo-normals, 1 winding number,
+  2 even-odd crossings), scale ``s``, centre ``c`` (3 slots), far-field ratio squared, the
+  absolute offsets of the node, element and winding blocks, and the floats per element. A user
+  point ``x`` is queried as ``q = (x - c) / s``.
+- node ``k`` (``2 D + 2`` floats): box lower (D), box upper (D), ``first``, ``count`` as in
   :mod:`ndpack.meshes.bvh`.
 - triangle ``k`` (``TRIANGLE`` floats, in leaf order): vertices a, b, c (9), then the
   angle-weighted pseudo-normals of its face (3), edges ab, bc, ca (9) and vertices a, b, c (9).
-- winding data of node ``k`` (``WINDING`` floats): area vector (3), area centroid (3), radius.
+- segment ``k`` (``SEGMENT`` floats): ends a, b (4), then the pseudo-normals of the segment (2) and
+  of its ends (4).
+- winding data of node ``k`` (``WINDING`` floats, 3-D): area vector (3), area centroid (3), radius.
+
+Two names are bound per dimension when a program is built (:func:`add_queries`): ``element_query``
+(``triangle_query`` or ``segment_query``) and ``inside_measure`` (the winding number, or the
+crossing parity), so the tree walk and :func:`surface_distance` are written once for both.
 """
 
 # ruff: noqa: F821  (stack and point are supplied when a kernel is printed)
 
 import math
 
-HEADER = 10
-NODE = 8
+HEADER = 11
 TRIANGLE = 30
+SEGMENT = 10
 WINDING = 7
 
 
-# [node box lower (3), upper (3)] at b: squared distance from q to the box (0 inside).
+def node_size(dim: int) -> int:
+    """Floats per tree node: box lower and upper, first, count."""
+    return 2 * dim + 2
+
+
+def add_queries(program) -> str:
+    """Add the surface queries of ``program.dim`` (2 or 3) to ``program``; returns the name of
+    :func:`surface_distance`."""
+    if program.dim == 3:
+        program.use(triangle_query, name="element_query")
+        program.use(mesh_winding_number, name="inside_measure")
+    else:
+        program.use(segment_query, name="element_query")
+        program.use(outline_crossings, name="inside_measure")
+    return program.use(surface_distance)
+
+
+# [node box lower (D), upper (D)] at b: squared distance from q to the box (0 inside).
 def box_squared_distance(q, prm, b: int):
     s = 0.0
-    for i in range(3):
-        t = max(prm[b + i] - q[i], q[i] - prm[b + 3 + i], 0.0)
+    for i in range(D):
+        t = max(prm[b + i] - q[i], q[i] - prm[b + D + i], 0.0)
         s += t * t
     return s
 
@@ -103,11 +127,13 @@ def triangle_query(q, prm, t: int, want: int):
     return q[2] - oz
 
 
-# The triangle nearest to q closer than sqrt(limit) (squared, normalised units), or -1.
+# The element nearest to q closer than sqrt(limit) (squared, normalised units), or -1.
 # Closest child first, so the best distance shrinks early and prunes most of the tree.
-def mesh_nearest_triangle(q, prm, o: int, limit: float):
+def nearest_element(q, prm, o: int, limit: float):
     nodes = int(prm[o + 7])
-    triangles = int(prm[o + 8])
+    elements = int(prm[o + 8])
+    stride = int(prm[o + 10])
+    size = 2 * D + 2
     best = limit
     found = -1
     pending = stack()
@@ -116,22 +142,22 @@ def mesh_nearest_triangle(q, prm, o: int, limit: float):
     while top > 0:
         top -= 1
         node = pending[top]
-        b = nodes + 8 * node
+        b = nodes + size * node
         if box_squared_distance(q, prm, b) >= best:
             continue
-        count = int(prm[b + 7])
+        count = int(prm[b + 2 * D + 1])
         if count > 0:
-            start = int(prm[b + 6])
+            start = int(prm[b + 2 * D])
             for k in range(start, start + count):
-                d = triangle_query(q, prm, triangles + 30 * k, 0)
+                d = element_query(q, prm, elements + stride * k, 0)
                 if d < best:
                     best = d
                     found = k
         else:
             left = node + 1
-            right = int(prm[b + 6])
-            near_left = box_squared_distance(q, prm, nodes + 8 * left)
-            near_right = box_squared_distance(q, prm, nodes + 8 * right)
+            right = int(prm[b + 2 * D])
+            near_left = box_squared_distance(q, prm, nodes + size * left)
+            near_right = box_squared_distance(q, prm, nodes + size * right)
             # Push the farther child first, so the nearer is visited next.
             if near_left <= near_right:
                 if near_right < best:
@@ -206,19 +232,86 @@ def mesh_winding_number(q, prm, o: int):
     return total / (4.0 * math.pi)
 
 
-# The signed distance from p (user units) to the mesh at o: negative inside.
-def mesh_distance(p, prm, o: int):
+# [segment at t] (D = 2): as triangle_query, for the closest point of the segment.
+def segment_query(q, prm, t: int, want: int):
+    abx = prm[t + 2] - prm[t]
+    aby = prm[t + 3] - prm[t + 1]
+    apx = q[0] - prm[t]
+    apy = q[1] - prm[t + 1]
+    s = (apx * abx + apy * aby) / (abx * abx + aby * aby)
+    n = t + 4
+    if s <= 0.0:
+        s = 0.0
+        n = t + 6
+    elif s >= 1.0:
+        s = 1.0
+        n = t + 8
+    ox = apx - s * abx
+    oy = apy - s * aby
+    if want == 0:
+        return ox * ox + oy * oy
+    if want == 1:
+        return ox * prm[n] + oy * prm[n + 1]
+    if want == 2:
+        return q[0] - ox
+    return q[1] - oy
+
+
+# The even-odd rule (D = 2): 1 where a ray from q towards +x crosses an odd number of segments,
+# else 0. Only nodes whose box meets the ray are opened; each segment is tested exactly as
+# ndpack.shapes.polygon tests it, so both agree on every point.
+def outline_crossings(q, prm, o: int):
+    nodes = int(prm[o + 7])
+    segments = int(prm[o + 8])
+    x = q[0]
+    y = q[1]
+    crossings = 0
+    pending = stack()
+    pending[0] = 0
+    top = 1
+    while top > 0:
+        top -= 1
+        node = pending[top]
+        b = nodes + 6 * node
+        if prm[b + 1] > y or prm[b + 3] < y or prm[b + 2] < x:
+            continue
+        count = int(prm[b + 5])
+        if count > 0:
+            start = int(prm[b + 4])
+            for k in range(start, start + count):
+                t = segments + 10 * k
+                sx = prm[t]
+                sy = prm[t + 1]
+                ey = prm[t + 3]
+                edge_x = prm[t + 2] - sx
+                edge_y = ey - sy
+                above_start = 1 if sy > y else 0
+                above_end = 1 if ey > y else 0
+                if above_start != above_end:
+                    left = 1 if edge_x * (y - sy) - (x - sx) * edge_y > 0.0 else 0
+                    upward = 1 if edge_y > 0.0 else 0
+                    if left == upward:
+                        crossings += 1
+        else:
+            pending[top] = int(prm[b + 4])
+            pending[top + 1] = node + 1
+            top += 2
+    return crossings % 2
+
+
+# The signed distance from p (user units) to the surface at o: negative inside.
+def surface_distance(p, prm, o: int):
     scale = prm[o + 2]
     q = point()
-    for i in range(3):
+    for i in range(D):
         q[i] = (p[i] - prm[o + 3 + i]) / scale
-    k = int(mesh_nearest_triangle(q, prm, o, 1.0e30))
-    t = int(prm[o + 8]) + 30 * k
-    unsigned = math.sqrt(triangle_query(q, prm, t, 0)) * scale
+    k = int(nearest_element(q, prm, o, 1.0e30))
+    t = int(prm[o + 8]) + int(prm[o + 10]) * k
+    unsigned = math.sqrt(element_query(q, prm, t, 0)) * scale
     if prm[o + 1] == 0.0:
-        if triangle_query(q, prm, t, 1) < 0.0:
+        if element_query(q, prm, t, 1) < 0.0:
             return -unsigned
         return unsigned
-    if mesh_winding_number(q, prm, o) > 0.5:
+    if inside_measure(q, prm, o) > 0.5:
         return -unsigned
     return unsigned

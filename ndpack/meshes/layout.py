@@ -1,4 +1,5 @@
-"""A triangle mesh as the flat parameter block its kernels read (:mod:`ndpack.meshes.kernels`)."""
+"""Triangle meshes and 2-D outlines as the flat parameter blocks their kernels read
+(:mod:`ndpack.meshes.kernels`)."""
 
 from __future__ import annotations
 
@@ -6,10 +7,10 @@ import numba
 import numpy as np
 
 from . import bvh
-from .kernels import HEADER, NODE, TRIANGLE, WINDING
+from .kernels import HEADER, SEGMENT, TRIANGLE, WINDING, node_size
 
 #: Sign methods, as stored in the header.
-SIGN_CODES = {"pseudonormal": 0.0, "winding": 1.0}
+SIGN_CODES = {"pseudonormal": 0.0, "winding": 1.0, "even-odd": 2.0}
 #: A tree node counts as one dipole in the winding number when the query point is farther than
 #: this many node radii from its centre (Barill et al. use 2; the first-order error is then a few
 #: thousandths, far from the 0.5 threshold except next to holes).
@@ -85,19 +86,54 @@ def pack_mesh(vertices: np.ndarray, faces: np.ndarray, sign: str) -> np.ndarray:
         triangles[order].reshape(-1, 9), face_normals[order],
         edge_normals[order].reshape(-1, 9), vertex_normals[order].reshape(-1, 9),
     ], axis=1)
-    node_block = np.concatenate([tree.lower, tree.upper, tree.first[:, None], tree.count[:, None]], axis=1)
     winding_block = _winding_data(triangles[order], tree.lower, tree.upper, tree.first, tree.count)
 
-    n_nodes = tree.n_nodes
-    nodes_at = HEADER
-    triangles_at = nodes_at + NODE * n_nodes
-    winding_at = triangles_at + TRIANGLE * len(faces)
-    header = np.array([n_nodes, SIGN_CODES[sign], scale, *center, FAR_FIELD_RATIO**2,
-                       nodes_at, triangles_at, winding_at])
-    assert header.size == HEADER and node_block.shape[1] == NODE
     assert triangle_block.shape[1] == TRIANGLE and winding_block.shape[1] == WINDING
-    block = np.concatenate([header, node_block.ravel(), triangle_block.ravel(), winding_block.ravel()])
+    block = _assemble(tree, center, scale, sign, triangle_block, winding_block)
     return block, order
+
+
+def pack_outline(segments: np.ndarray, vertex_normals: np.ndarray) -> np.ndarray:
+    """The parameter block of a closed 2-D outline, signed by the even-odd rule.
+
+    Parameters
+    ----------
+    segments : (e, 2, 2) float64
+        Edges as (start, end), every ring closed.
+    vertex_normals : (e, 2, 2) float64
+        Pseudo-normals at each edge's start and end (the sum of the two edges' normals).
+
+    Returns
+    -------
+    (k,) float64
+        Offsets counted from the block's start, like :func:`pack_mesh`.
+    """
+    points = segments.reshape(-1, 2)
+    lower, upper = points.min(axis=0), points.max(axis=0)
+    center = 0.5 * (lower + upper)
+    scale = 0.5 * float((upper - lower).max())
+    unit = (segments - center) / scale
+    tree = bvh.build(unit)
+    edge = unit[:, 1] - unit[:, 0]
+    normal = np.column_stack([edge[:, 1], -edge[:, 0]]) / np.linalg.norm(edge, axis=1, keepdims=True)
+    order = tree.order
+    element_block = np.concatenate([unit[order].reshape(-1, 4), normal[order], vertex_normals[order].reshape(-1, 4)],
+                                   axis=1)
+    assert element_block.shape[1] == SEGMENT
+    return _assemble(tree, np.append(center, 0.0), scale, "even-odd", element_block, np.zeros((0, WINDING)))
+
+
+def _assemble(tree, center, scale, sign, element_block, winding_block) -> np.ndarray:
+    """Header, nodes, elements and winding data as one block (offsets from its start)."""
+    dim = tree.lower.shape[1]
+    node_block = np.concatenate([tree.lower, tree.upper, tree.first[:, None], tree.count[:, None]], axis=1)
+    nodes_at = HEADER
+    elements_at = nodes_at + node_size(dim) * tree.n_nodes
+    winding_at = elements_at + element_block.size
+    header = np.array([tree.n_nodes, SIGN_CODES[sign], scale, *center, FAR_FIELD_RATIO**2,
+                       nodes_at, elements_at, winding_at, element_block.shape[1]])
+    assert header.size == HEADER and node_block.shape[1] == node_size(dim)
+    return np.concatenate([header, node_block.ravel(), element_block.ravel(), winding_block.ravel()])
 
 
 def relocate(block: np.ndarray, offset: int) -> np.ndarray:

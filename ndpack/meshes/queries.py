@@ -17,7 +17,7 @@ from . import kernels
 _LOOPS = '''
 def signed_all(points, prm, out):
     for i in prange(points.shape[0]):
-        out[i] = mesh_distance(points[i], prm, 0)
+        out[i] = surface_distance(points[i], prm, 0)
 
 
 def closest_all(points, prm, limit, sign, out_distance, out_closest, out_triangle):
@@ -26,7 +26,7 @@ def closest_all(points, prm, limit, sign, out_distance, out_closest, out_triangl
         q = np.empty(3)
         for j in range(3):
             q[j] = (points[i, j] - prm[3 + j]) / scale
-        k = int(mesh_nearest_triangle(q, prm, 0, (limit / scale) ** 2))
+        k = int(nearest_element(q, prm, 0, (limit / scale) ** 2))
         out_triangle[i] = k
         if k < 0:
             out_distance[i] = limit
@@ -59,10 +59,10 @@ def _namespace():
     import numba
 
     program = Program(3)
-    for function in (kernels.mesh_distance, kernels.mesh_nearest_triangle, kernels.triangle_query,
-                     kernels.mesh_winding_number):
+    kernels.add_queries(program)
+    for function in (kernels.nearest_element, kernels.triangle_query, kernels.mesh_winding_number):
         program.use(function)
-    serial = _LOOPS.replace("def ", "def serial_").replace("serial_mesh", "mesh")
+    serial = _LOOPS.replace("def ", "def serial_")
 
     def jit(namespace, names):
         namespace["prange"] = numba.prange

@@ -188,7 +188,7 @@ class TriangleMesh(Oracle):
 
     def _kernel(self, program):
         offset = program.add_params(layout.relocate(self._block, program.next_offset))
-        return program.define(f"def _(p, prm):\n    return {program.use(kernels.mesh_distance)}(p, prm, {offset})\n")
+        return program.define(f"def _(p, prm):\n    return {kernels.add_queries(program)}(p, prm, {offset})\n")
 
     def __repr__(self) -> str:
         what = f"{self.name!r}, " if self.name else ""

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from ..errors import ShapeError
-from ..kernels import library
+from ..meshes import kernels, layout
 from ..oracle import Oracle
 
 
@@ -292,12 +292,22 @@ class Polygon(Oracle):
         return distance, gradient
 
     def _kernel(self, program):
-        # Ring count and vertex counts first, then the vertices: the program text is the same
-        # for every polygon (the loops read the counts from the parameters).
-        rings = list(self._rings)
-        values = [len(rings), *(len(ring) for ring in rings), *np.concatenate(rings).ravel()]
-        offset = program.add_params(values)
-        return program.define(f"def _(p, prm):\n    return {program.use(library.polygon)}(p, prm, {offset})\n")
+        # The edges in a segment hierarchy (ndpack.meshes), so a query costs about log(edges).
+        block = self.__dict__.get("_outline_block")
+        if block is None:
+            block = self._outline_block = layout.pack_outline(
+                np.stack([self._start, self._end], axis=1), self._vertex_normals())
+        offset = program.add_params(layout.relocate(block, program.next_offset))
+        return program.define(f"def _(p, prm):\n    return {kernels.add_queries(program)}(p, prm, {offset})\n")
+
+    def _vertex_normals(self) -> np.ndarray:
+        """(e, 2, 2): the pseudo-normals at each edge's start and end (sums of the two edge normals)."""
+        normals, at = [], 0
+        for ring in self._rings:
+            own = self._normal[at:at + len(ring)]
+            normals.append(np.stack([own + np.roll(own, 1, axis=0), own + np.roll(own, -1, axis=0)], axis=1))
+            at += len(ring)
+        return np.concatenate(normals)
 
     def __repr__(self) -> str:
         text = f"Polygon({len(self.outer)} vertices"
