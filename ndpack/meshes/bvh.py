@@ -13,7 +13,8 @@ an inner node has ``count == 0`` and its right child in ``first[k]``.
 
 from __future__ import annotations
 
-import numba
+import functools
+
 import numpy as np
 
 #: Most triangles in a leaf (8 measured fastest among 1, 2, 4, 8, 16 and 24 on the armadillo).
@@ -59,11 +60,18 @@ def build(elements: np.ndarray) -> Tree:
     elements = np.ascontiguousarray(elements, dtype=np.float64)
     if len(elements) == 0:
         raise ValueError("cannot build a hierarchy over no elements")
-    return Tree(*_build(elements.min(axis=1), elements.max(axis=1), elements.mean(axis=1),
+    return Tree(*_compiled()(elements.min(axis=1), elements.max(axis=1), elements.mean(axis=1),
                         LEAF_SIZE, BINS, MAX_DEPTH))
 
 
-@numba.njit(cache=True)
+@functools.cache
+def _compiled():
+    """``_build`` compiled by Numba (imported only when a tree is built: ``import ndpack`` stays light)."""
+    import numba
+
+    return numba.njit(cache=True)(_build)
+
+
 def _build(box_lower, box_upper, centroids, leaf_size, bins, max_depth):
     n, dim = centroids.shape
     order = np.arange(n)

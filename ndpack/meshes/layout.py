@@ -3,7 +3,8 @@
 
 from __future__ import annotations
 
-import numba
+import functools
+
 import numpy as np
 
 from . import bvh
@@ -86,7 +87,7 @@ def pack_mesh(vertices: np.ndarray, faces: np.ndarray, sign: str) -> np.ndarray:
         triangles[order].reshape(-1, 9), face_normals[order],
         edge_normals[order].reshape(-1, 9), vertex_normals[order].reshape(-1, 9),
     ], axis=1)
-    winding_block = _winding_data(triangles[order], tree.lower, tree.upper, tree.first, tree.count)
+    winding_block = _compiled_winding_data()(triangles[order], tree.lower, tree.upper, tree.first, tree.count)
 
     assert triangle_block.shape[1] == TRIANGLE and winding_block.shape[1] == WINDING
     block = _assemble(tree, center, scale, sign, triangle_block, winding_block)
@@ -143,7 +144,13 @@ def relocate(block: np.ndarray, offset: int) -> np.ndarray:
     return block
 
 
-@numba.njit(cache=True)
+@functools.cache
+def _compiled_winding_data():
+    import numba
+
+    return numba.njit(cache=True)(_winding_data)
+
+
 def _winding_data(triangles, lower, upper, first, count):
     """(m, 7): per node, area vector, area-weighted centroid and a radius enclosing its triangles."""
     n_nodes = len(first)
