@@ -33,7 +33,8 @@ def ndpack_engines(mesh, points):
     engines = [("ndpack numba-cpu (oracle)", "cpu", 0.0, lambda: mesh.distance(points))]
     from ndpack import backends
 
-    for name, options in (("numba", {}), ("warp", {"precision": "float32"}), ("numba-cuda", {})):
+    for name, options in (("numba", {}), ("warp", {"precision": "float32"}), ("warp", {"precision": "float64"}),
+                          ("numba-cuda", {})):
         try:
             backend = backends.get_backend(name, **options)
         except nd.BackendError:
@@ -42,7 +43,7 @@ def ndpack_engines(mesh, points):
         device = f"cuda:{device}" if name == "numba-cuda" else device
         started = time.perf_counter()
         backend.distance(mesh, points[:64])  # compiles and uploads the mesh
-        label = f"ndpack {name}" + (" float32" if options else "")
+        label = f"ndpack {name}" + (f" {options['precision']}" if options else "")
         engines.append((label, str(device), time.perf_counter() - started,
                         lambda backend=backend: backend.distance(mesh, points)))
     return engines

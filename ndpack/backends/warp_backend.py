@@ -77,6 +77,10 @@ class WarpBackend(Backend):
             module = warp_module(program, self.precision, KERNELS)
             self.wp.load_module(module, device=self.device)
             h = self.float(FD_STEP[self.precision] * shape.scale)
+            if program.device_values and self.precision == "float32":
+                params = params.copy()
+                for offset, count, resolve in program.device_values:
+                    params[offset:offset + count] = resolve(self.device)
             self._modules[key] = (program, module, self._array(params, module.F), h)
         return self._modules[key][1:]
 

@@ -39,6 +39,12 @@ class Program:
         self._size = 0
         self._shapes: dict[int, str] = {}
         self._defined = 0
+        #: Warp float32 replacements of kernels, by name: native Warp code (wp.Mesh queries)
+        #: where the kernel language has no equivalent; the checked kernel stays the fallback.
+        self.warp_natives: dict[str, str] = {}
+        #: (offset, count, resolve): parameters known only on a device; ``resolve(device)`` gives
+        #: the ``count`` values a Warp backend writes there (the host copy holds zeros).
+        self.device_values: list[tuple] = []
 
     # ------------------------------------------------------------------ building
     def add_params(self, values) -> int:
@@ -84,6 +90,10 @@ class Program:
             self.kernels[name] = Kernel(source if name != fn.__name__ else fn, callees=self.kernels)
         return name
 
+    def add_device_values(self, offset: int, count: int, resolve) -> None:
+        """Mark ``count`` parameters from ``offset`` as filled per device by ``resolve(device)``."""
+        self.device_values.append((offset, count, resolve))
+
     def define(self, source: str) -> str:
         """Add a generated function written as ``def _(p, prm): ...``; returns its unique name."""
         name = f"k{self._defined}"
@@ -113,7 +123,8 @@ class Program:
     # ------------------------------------------------------------------ output
     def source(self, dialect: str, float_name: str = "float64") -> str:
         """All functions in ``dialect``, then ``sd(p, prm)`` calling the shape's entry."""
-        parts = [kernel.render(dialect, self.dim, float_name) for kernel in self.kernels.values()]
+        parts = [self.warp_natives[name] if dialect == "warp" and float_name == "float32" and name in self.warp_natives
+                 else kernel.render(dialect, self.dim, float_name) for name, kernel in self.kernels.items()]
         return "\n\n\n".join(parts) + "\n"
 
     @property

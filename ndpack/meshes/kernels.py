@@ -8,8 +8,9 @@ normalised to the unit box around it (so float32 keeps its precision); see
 
 - header ``prm[o : o + HEADER]``: node count, sign method (0 pseudo-normals, 1 winding number,
   2 even-odd crossings), scale ``s``, centre ``c`` (3 slots), far-field ratio squared, the
-  absolute offsets of the node, element and winding blocks, and the floats per element. A user
-  point ``x`` is queried as ``q = (x - c) / s``.
+  absolute offsets of the node, element and winding blocks, the floats per element, and four
+  slots for the id of a Warp ``wp.Mesh`` of the same triangles (16 bits each; see
+  :data:`WARP_NEAREST`). A user point ``x`` is queried as ``q = (x - c) / s``.
 - node ``k`` (``2 D + 2`` floats): box lower (D), box upper (D), ``first``, ``count`` as in
   :mod:`ndpack.meshes.bvh`.
 - triangle ``k`` (``TRIANGLE`` floats, in leaf order): vertices a, b, c (9), then the
@@ -27,7 +28,9 @@ crossing parity), so the tree walk and :func:`surface_distance` are written once
 
 import math
 
-HEADER = 11
+HEADER = 15
+#: Where the Warp mesh id sits in the header (four 16-bit pieces: exact in float32).
+MESH_ID = 11
 TRIANGLE = 30
 SEGMENT = 10
 WINDING = 7
@@ -44,6 +47,7 @@ def add_queries(program) -> str:
     if program.dim == 3:
         program.use(triangle_query, name="element_query")
         program.use(mesh_winding_number, name="inside_measure")
+        program.warp_natives["nearest_element"] = WARP_NEAREST
     else:
         program.use(segment_query, name="element_query")
         program.use(outline_crossings, name="inside_measure")
@@ -230,6 +234,20 @@ def mesh_winding_number(q, prm, o: int):
             pending[top + 1] = node + 1
             top += 2
     return total / (4.0 * math.pi)
+
+
+# Warp in float32 finds the nearest triangle with its own BVH (wp.Mesh, built by the Warp backend
+# from the same triangles in the same order, so face k is triangle k); the distance and the sign
+# then come from the triangle data as on every other backend.
+WARP_NEAREST = """@wp.func
+def nearest_element(q: Any, prm: wp.array(dtype=wp.float32), o: int, limit: wp.float32):
+    mesh = wp.uint64(0)
+    for k in range(4):
+        mesh = mesh | (wp.uint64(int(prm[o + 11 + k])) << wp.uint64(16 * k))
+    hit = wp.mesh_query_point_no_sign(mesh, wp.vec3(q[0], q[1], q[2]), wp.sqrt(limit))
+    if hit.result:
+        return wp.float32(hit.face)
+    return wp.float32(-1.0)"""
 
 
 # [segment at t] (D = 2): as triangle_query, for the closest point of the segment.

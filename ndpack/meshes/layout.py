@@ -132,9 +132,26 @@ def _assemble(tree, center, scale, sign, element_block, winding_block) -> np.nda
     elements_at = nodes_at + node_size(dim) * tree.n_nodes
     winding_at = elements_at + element_block.size
     header = np.array([tree.n_nodes, SIGN_CODES[sign], scale, *center, FAR_FIELD_RATIO**2,
-                       nodes_at, elements_at, winding_at, element_block.shape[1]])
+                       nodes_at, elements_at, winding_at, element_block.shape[1], 0, 0, 0, 0])
     assert header.size == HEADER and node_block.shape[1] == node_size(dim)
     return np.concatenate([header, node_block.ravel(), element_block.ravel(), winding_block.ravel()])
+
+
+def warp_mesh_id(block: np.ndarray, device) -> np.ndarray:
+    """(4,) the id of a ``wp.Mesh`` of the block's triangles on ``device``, in 16-bit pieces.
+
+    The mesh is kept with the block's owner (see :class:`ndpack.TriangleMesh`): its id is a
+    pointer, valid only while the mesh lives.
+    """
+    import warp as wp
+
+    elements_at, stride = int(block[8]), int(block[10])
+    triangles = block[elements_at:elements_at + stride * int(round((block[9] - elements_at) / stride))]
+    corners = triangles.reshape(-1, stride)[:, :9].reshape(-1, 3).astype(np.float32)
+    mesh = wp.Mesh(points=wp.array(corners, dtype=wp.vec3, device=device),
+                   indices=wp.array(np.arange(len(corners), dtype=np.int32), dtype=wp.int32, device=device))
+    pieces = np.array([(mesh.id >> (16 * k)) & 0xFFFF for k in range(4)], dtype=np.float64)
+    return pieces, mesh
 
 
 def relocate(block: np.ndarray, offset: int) -> np.ndarray:

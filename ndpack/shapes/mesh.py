@@ -188,7 +188,16 @@ class TriangleMesh(Oracle):
 
     def _kernel(self, program):
         offset = program.add_params(layout.relocate(self._block, program.next_offset))
+        program.add_device_values(offset + kernels.MESH_ID, 4, self._warp_mesh_id)
         return program.define(f"def _(p, prm):\n    return {kernels.add_queries(program)}(p, prm, {offset})\n")
+
+    def _warp_mesh_id(self, device) -> np.ndarray:
+        """The 16-bit pieces of the id of this mesh's ``wp.Mesh`` on ``device`` (built once, kept)."""
+        meshes = self.__dict__.setdefault("_warp_meshes", {})
+        key = str(device)
+        if key not in meshes:
+            meshes[key] = layout.warp_mesh_id(self._block, device)
+        return meshes[key][0]
 
     def __repr__(self) -> str:
         what = f"{self.name!r}, " if self.name else ""
