@@ -304,3 +304,36 @@ def test_warp_counters_are_variables():
     # Warp refuses to change a name bound to a bare constant in a dynamic loop.
     text = build(make("polygon", 2, np.random.default_rng(0), 1)).source("warp")
     assert "crossings = int(0)" in text
+    assert "found = int(-1)" in text  # a negative constant too
+
+
+def test_stack_holds_ints_in_every_dialect():
+    from ndpack.kernels.language import Kernel
+
+    source = (
+        "def walk(p, prm):\n"
+        "    s = stack()\n"
+        "    s[0] = 3\n"
+        "    s[1] = s[0] + 1\n"
+        "    return float(s[1])\n"
+    )
+    kernel = Kernel(source)
+    assert kernel.types["s"] == "stack"
+    assert "np.empty(64, np.int64)" in kernel.render("numba", 2)
+    assert "cuda.local.array(64, int32)" in kernel.render("cuda", 2)
+    assert "Stack()" in kernel.render("warp", 2, "float32")
+    with pytest.raises(KernelError, match="stack holds ints"):
+        Kernel(source.replace("s[0] = 3", "s[0] = 3.5"))
+    with pytest.raises(KernelError, match="cannot be both an array"):
+        Kernel(source.replace("    s[0] = 3\n", "    s = 2.0\n"))
+
+
+def test_use_binds_a_function_under_another_name():
+    from ndpack.kernels.program import Program
+    from ndpack.meshes import kernels
+
+    for dim, element in ((2, "segment_query"), (3, "triangle_query")):
+        program = Program(dim)
+        kernels.add_queries(program)
+        text = program.source("numba")
+        assert "def element_query(" in text and f"def {element}(" not in text
