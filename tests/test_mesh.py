@@ -129,6 +129,9 @@ def test_sign_method_follows_the_check_of_the_mesh():
     assert load("fandisk", sign="winding").sign_method == "winding"
     with pytest.warns(MeshWarning, match="open"):
         nd.TriangleMesh.load(MESHES / "stanford-bunny-12k.ply", sign="pseudonormal")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MeshWarning)  # asked for knowingly: silent
+        assert nd.TriangleMesh.load(MESHES / "stanford-bunny-12k.ply", sign="winding").sign_method == "winding"
     with pytest.raises(ShapeError, match="sign must be one of"):
         load("fandisk", sign="normals")
 

@@ -93,6 +93,8 @@ class TriangleMesh(Oracle):
                               MeshWarning, stacklevel=3)
                 return asked
             self.notes.append("open surface: inside where the winding number exceeds 1/2")
+            if asked == "winding":
+                return asked  # chosen knowingly: no warning
             warnings.warn(
                 f"{where} is not closed (it has holes or unwelded seams): inside is decided by the generalised "
                 "winding number, and spheres next to a hole may reach through it; pass sign='winding' to "
