@@ -456,19 +456,19 @@ class _Printer(ast.NodeTransformer):
         if name == "float":
             arg = self.visit(node.args[0])
             return self.to_float(arg) if self.warp else ast.Call(func, [arg], [])
-        if name == "point":
-            if self.dialect == "warp":
-                return ast.Call(ast.Name("VecD"), [], [])
-            if self.dialect == "cuda":
-                return ast.parse(f"cuda.local.array({self.dim}, {self.float_name})", mode="eval").body
-            return ast.parse(f"np.empty({self.dim})", mode="eval").body
-        if name == "stack":
-            if self.dialect == "warp":
-                return ast.Call(ast.Name("Stack"), [], [])
-            if self.dialect == "cuda":
-                return ast.parse(f"cuda.local.array({STACK_DEPTH}, int32)", mode="eval").body
-            return ast.parse(f"np.empty({STACK_DEPTH}, np.int64)", mode="eval").body
+        if name in ("point", "stack"):
+            return ast.parse(self.local_array(name), mode="eval").body
         return ast.Call(func, [self.visit(a) for a in node.args], [])
+
+    def local_array(self, kind: str) -> str:
+        """The expression making a local ``point()`` (D floats) or ``stack()`` (ints) in this dialect."""
+        if self.warp:  # types the generated module defines (ndpack.kernels.compile.warp_module)
+            return "VecD()" if kind == "point" else "Stack()"
+        length, numba_type, numpy_type = ((self.dim, self.float_name, "np.float64") if kind == "point"
+                                          else (STACK_DEPTH, "int32", "np.int64"))
+        if self.dialect == "cuda":
+            return f"cuda.local.array({length}, {numba_type})"
+        return f"np.empty({length}, {numpy_type})"
 
     def visit_Assign(self, node):
         target = node.targets[0]

@@ -20,7 +20,7 @@ def signed_all(points, prm, out):
         out[i] = surface_distance(points[i], prm, 0)
 
 
-def closest_all(points, prm, limit, sign, out_distance, out_closest, out_triangle):
+def closest_all(points, prm, limit, signed, out_distance, out_closest, out_triangle):
     scale = prm[2]
     for i in prange(points.shape[0]):
         q = np.empty(3)
@@ -36,9 +36,9 @@ def closest_all(points, prm, limit, sign, out_distance, out_closest, out_triangl
         for j in range(3):
             out_closest[i, j] = triangle_query(q, prm, t, 2 + j) * scale + prm[3 + j]
         inside = False
-        if sign == 1:
+        if signed and prm[1] == 0.0:
             inside = triangle_query(q, prm, t, 1) < 0.0
-        elif sign == 2:
+        elif signed:
             inside = mesh_winding_number(q, prm, 0) > 0.5
         out_distance[i] = -unsigned if inside else unsigned
 
@@ -86,14 +86,14 @@ def signed_distance(block: np.ndarray, points: np.ndarray) -> np.ndarray:
     return out
 
 
-def closest(block: np.ndarray, points: np.ndarray, limit: float = np.inf, sign: str | None = None):
+def closest(block: np.ndarray, points: np.ndarray, limit: float = np.inf, signed: bool = False):
     """Nearest surface points of ``points`` (n, 3) within ``limit``.
 
     Returns
     -------
     distance : (n,) float64
-        Unsigned (``sign=None``) or signed by ``"pseudonormal"`` or ``"winding"``; ``limit``
-        where no triangle is within ``limit``.
+        Unsigned, or signed by the block's own sign method (``signed=True``); ``limit`` where no
+        triangle is within ``limit``.
     closest : (n, 3) float64
         Nearest points (NaN where none is within ``limit``).
     triangle : (n,) int64
@@ -103,8 +103,7 @@ def closest(block: np.ndarray, points: np.ndarray, limit: float = np.inf, sign: 
     distance, closest_points = np.empty(n), np.full((n, 3), np.nan)
     triangle = np.empty(n, dtype=np.int64)
     limit = min(float(limit), 1e30)
-    code = {None: 0, "pseudonormal": 1, "winding": 2}[sign]
-    _run("closest_all", points, block, limit, code, distance, closest_points, triangle)
+    _run("closest_all", points, block, limit, signed, distance, closest_points, triangle)
     return distance, closest_points, triangle
 
 

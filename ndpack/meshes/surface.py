@@ -28,6 +28,8 @@ class Surface:
         decided.
     closed : bool
         Every edge is shared by exactly two triangles with opposite directions.
+    volume : float
+        Enclosed volume by the divergence theorem (only meaningful when closed).
     notes : list of str
         The repairs made, in words.
     """
@@ -35,6 +37,7 @@ class Surface:
     vertices: np.ndarray
     faces: np.ndarray
     closed: bool
+    volume: float
     notes: list[str] = field(default_factory=list)
 
 
@@ -141,4 +144,4 @@ def prepare(vertices, faces) -> Surface:
         mesh.invert()
         notes.append("turned the triangles outward (they faced inward)")
     return Surface(np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64),
-                   closed, notes)
+                   closed, abs(volume), notes)

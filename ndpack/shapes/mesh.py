@@ -80,10 +80,7 @@ class TriangleMesh(Oracle):
         self.sign_method = self._choose_sign(sign)
         self._block[1] = layout.SIGN_CODES[self.sign_method]
         self.exact_inside = self.exact_outside = self.sign_method == "pseudonormal"
-        self._volume = None
-        if self.closed:
-            corners = self.vertices[self.faces]
-            self._volume = float(np.einsum("fi,fi->f", corners[:, 0], np.cross(corners[:, 1], corners[:, 2])).sum() / 6)
+        self._volume = prepared.volume if self.closed else None
 
     def _choose_sign(self, asked: str) -> str:
         where = f"{self!r}"
@@ -114,7 +111,7 @@ class TriangleMesh(Oracle):
         """Sample points (away from the surface) where the two sign methods disagree."""
         lower, upper = self._bounds
         points = lower + (upper - lower) * np.random.default_rng(0).random((SIGN_CHECK_SAMPLES, 3))
-        distance = queries.closest(self._block, points, sign="pseudonormal")[0]
+        distance = queries.signed_distance(self._block, points)  # the block still says pseudo-normals
         winding = queries.winding_number(self._block, points)
         clear = np.abs(distance) > 1e-6 * self.scale
         return int(np.count_nonzero(clear & ((distance < 0) != (winding > 0.5))))
@@ -171,7 +168,7 @@ class TriangleMesh(Oracle):
         return queries.signed_distance(self._block, points)
 
     def _distance_and_gradient(self, points: np.ndarray):
-        distance, closest, triangle = queries.closest(self._block, points, sign=self.sign_method)
+        distance, closest, triangle = queries.closest(self._block, points, signed=True)
         away = points - closest
         length = np.abs(distance)
         gradient = np.sign(distance)[:, None] * away / np.where(length > 0, length, 1.0)[:, None]

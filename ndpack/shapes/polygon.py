@@ -50,6 +50,14 @@ def _signed_area(ring: np.ndarray) -> float:
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 
+def _ring_area(ring: np.ndarray, what: str) -> float:
+    """The signed area of a ring, or a :class:`ShapeError` naming it when it has none."""
+    area = _signed_area(ring)
+    if abs(area) <= 1e-12 * float(np.ptp(ring, axis=0).max()) ** 2:
+        raise ShapeError(f"{what} has zero area: its vertices are all on one line")
+    return area
+
+
 def _crossing_parity(points: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
     """Even-odd rule: (n,) bool, True where a ray towards +x crosses an odd number of edges.
 
@@ -117,13 +125,7 @@ class Polygon(Oracle):
             )
         holes = [_as_ring(hole, f"hole {i}") for i, hole in enumerate(holes)]
 
-        rings = [outer, *holes]
-        areas = [_signed_area(ring) for ring in rings]
-        for i, (ring, area) in enumerate(zip(rings, areas)):
-            extent = float(np.ptp(ring, axis=0).max())
-            if abs(area) <= 1e-12 * extent**2:
-                what = "the outer ring" if i == 0 else f"hole {i - 1}"
-                raise ShapeError(f"{what} has zero area: its vertices are all on one line")
+        areas = [_ring_area(outer, "the outer ring"), *(_ring_area(hole, f"hole {i}") for i, hole in enumerate(holes))]
 
         # Outer counter-clockwise, holes clockwise: the region is on the left of every edge,
         # so the outward normal of edge (dx, dy) is always (dy, -dx) / length.
@@ -182,10 +184,7 @@ class Polygon(Oracle):
         rings = [_as_ring(ring, f"ring {i}") for i, ring in enumerate(rings)]
         if not rings:
             raise ShapeError("a polygon needs at least one ring")
-        areas = np.array([_signed_area(ring) for ring in rings])
-        extent = max(float(np.ptp(ring, axis=0).max()) for ring in rings)
-        if np.any(np.abs(areas) <= 1e-12 * extent**2):
-            raise ShapeError(f"ring {int(np.argmin(np.abs(areas)))} has zero area: its vertices are all on one line")
+        areas = np.array([_ring_area(ring, f"ring {i}") for i, ring in enumerate(rings)])
         # Nesting depth of each ring: how many other rings hold its first vertex.
         depth = np.zeros(len(rings), dtype=int)
         for j, other in enumerate(rings):
