@@ -28,7 +28,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .backends import get_backend
-from .backends.prototypes import best_starts
+from .backends.prototypes import best_starts, top_order
 from .errors import ParameterError, ShapeError
 from .oracle import Oracle, ball_volume, check_compatible, check_packable
 from .shapes.adapters import as_oracle
@@ -52,9 +52,26 @@ POLISH_WINDOW = 0.05
 PUSH_OUT = 1.001
 #: Random starts per cell when dead prototypes are revived, before the driver gives up for room.
 REVIVE_TRIES, REVIVE_CHUNK = 32, 2048
+#: Fast mode stops splitting cells at this many prototypes (memory).
+MAX_PROTOTYPES = 16_000_000
 #: Radii are shrunk by this fraction of the shape's scale, so that float64 rounding in the
 #: distances (about 1e-16 of the scale) can never make touching spheres overlap or poke out.
 SAFETY_MARGIN = 1e-10
+#: Fast mode: candidates within this fraction of the largest clearance become spheres in one round
+#: (those disjoint from the larger ones kept).
+FAST_WINDOW = 0.1
+#: Fast mode: a cell splits in two (across its longest side) while that side is longer than this
+#: many times the largest clearance and the cell could still hold a candidate, so that the gaps
+#: being filled are never much smaller than the cells that search for them.
+SPLIT_RATIO = 4.0
+#: Fast mode: at most this many candidates a round (bounds the host's conflict check).
+MAX_CANDIDATES = 1 << 16
+#: More new spheres than this: :func:`nearest_sphere` searches a k-d tree instead of testing all.
+NEAREST_BY_SEARCH = 64
+#: The cells' walls (lower bounds of the boundary's distance, which let deep prototypes skip
+#: the shape's distance) are lowered by this many safety margins: far above the rounding of a
+#: distance, so a skipped evaluation never changes a result.
+WALL_SLACK = 10.0
 
 
 def cooling_schedule(
@@ -151,35 +168,44 @@ class _ProtoSphere:
         # The distance is 1-Lipschitz: a cell whose centre is farther out than half its
         # diagonal holds no interior point.
         keep = centre_distance < half_diagonal
-        self.cell_lower = cell_lower[keep]
-        self.cell_upper = self.cell_lower + cell_size
+        cells = {"lower": cell_lower[keep], "upper": cell_lower[keep] + cell_size}
         # Upper bound of any clearance inside the cell, used to find the spheres near it.
-        self.reach = -centre_distance[keep] + half_diagonal
-        starts = self._candidate_starts(centres[keep][None])
-        no_spheres = np.zeros((len(self.cell_lower), 0), dtype=np.int64)
-        self.points, self.clearance = best_starts(self.backend, self.shape, starts, *self.spheres, no_spheres)
-        alive = self.clearance > 0
+        cells["reach"] = -centre_distance[keep] + half_diagonal
+        # Lower bound of the boundary's distance at the centre, less a slack for rounding.
+        cells["wall"] = -centre_distance[keep] - WALL_SLACK * self.margin
+        starts = self._candidate_starts(centres[keep][None], cells=cells)
+        no_spheres = np.zeros((len(cells["lower"]), 0), dtype=np.int64)
+        points, clearance = best_starts(self.backend, self.shape, starts, *self.spheres, no_spheres)
+        alive = clearance > 0
         if not alive.any():
             raise ShapeError(
                 f"found no interior point of {self.shape!r} in {total:,} grid cells: the shape "
                 "is empty (check the CSG, e.g. a difference that removes everything) or thinner "
                 "than a cell (pass a finer grid=)"
             )
-        for name in ("cell_lower", "cell_upper", "reach", "points", "clearance"):
-            setattr(self, name, getattr(self, name)[alive])
+        cells = {name: value[alive] for name, value in cells.items()}
         points, clearance = self.backend.converge(
-            self.shape, self.points, self.cell_lower, self.cell_upper,
-            self.centers[:0], self.radii[:0], no_spheres[alive], self.steps,
+            self.shape, points[alive], cells["lower"], cells["upper"],
+            self.centers[:0], self.radii[:0], no_spheres[alive], self.steps, cells["wall"],
         )
-        del self.points, self.clearance  # from here on they live in the store, maybe on a GPU
+        # From here on the prototypes and their cells live in the store, maybe on a GPU.
         self.prototypes = self.backend.prototypes(
-            self.shape, self.cell_lower, self.cell_upper, self.reach, points, clearance
+            self.shape, cells["lower"], cells["upper"], cells["reach"], points, clearance, cells["wall"]
         )
 
-    def _candidate_starts(self, first, ids=None, tries=None):
-        """(k + tries, n, d): the ``first`` (k, n, d) points and random points of each cell."""
-        lower = self.cell_lower if ids is None else self.cell_lower[ids]
-        upper = self.cell_upper if ids is None else self.cell_upper[ids]
+    @property
+    def cell_lower(self):
+        return self.prototypes.cell_lower
+
+    @property
+    def cell_upper(self):
+        return self.prototypes.cell_upper
+
+    def _candidate_starts(self, first, ids=None, tries=None, cells=None):
+        """(k + tries, n, d): the ``first`` (k, n, d) points and random points of each cell
+        (of the store, or of ``cells`` before there is one)."""
+        lower = cells["lower"] if cells else self.cell_lower if ids is None else self.cell_lower[ids]
+        upper = cells["upper"] if cells else self.cell_upper if ids is None else self.cell_upper[ids]
         tries = self.restarts if tries is None else tries
         random = lower + (upper - lower) * self.rng.random((tries, *lower.shape))
         return np.concatenate([first, random])
@@ -198,11 +224,10 @@ class _ProtoSphere:
         """
         first = np.empty((0, len(ids), self.dim))
         if new_centers is not None:
-            offsets = points[:, None, :] - new_centers  # (n, k, d)
-            lengths = np.linalg.norm(offsets, axis=2)
-            nearest = np.argmin(lengths - new_radii, axis=1)
-            rows = np.arange(len(ids))
-            direction = offsets[rows, nearest] / np.maximum(lengths[rows, nearest], 1e-300)[:, None]
+            nearest = nearest_sphere(points, new_centers, new_radii)
+            offsets = points - new_centers[nearest]
+            lengths = np.linalg.norm(offsets, axis=1)
+            direction = offsets / np.maximum(lengths, 1e-300)[:, None]
             pushed = new_centers[nearest] + direction * (PUSH_OUT * new_radii[nearest])[:, None]
             first = np.clip(pushed, self.cell_lower[ids], self.cell_upper[ids])[None]
         starts = self._candidate_starts(first, ids, tries)
@@ -245,6 +270,73 @@ class _ProtoSphere:
                 chosen.append(i)
         return centers[chosen], radii[chosen]
 
+    def choose_window(self, window, min_radius, room):
+        """Fast mode: every candidate within ``window`` of the largest clearance, largest first,
+        kept where it is disjoint from the larger ones kept: ((k, d), (k,)).
+
+        Every unpolished prototype in the window (and ``POLISH_WINDOW`` below it) is polished first.
+        """
+        while True:
+            _, top, _, unpolished = self.prototypes.leaders(1, window + POLISH_WINDOW)
+            if len(unpolished) == 0:
+                break
+            self.prototypes.move(unpolished, *self.spheres, self.polish_steps, polish=True)
+        if top[0] <= 0:
+            return np.empty((0, self.dim)), np.empty(0)
+        ids, clearance = self.prototypes.select(low=(1 - window) * top[0])
+        order = top_order(ids, clearance, min(MAX_CANDIDATES, len(ids)))
+        centers, clearance = self.prototypes.gather(ids[order])
+        radii = clearance - self.margin
+        large_enough = radii >= max(min_radius, self.margin)
+        centers, radii = centers[large_enough], radii[large_enough]
+        chosen = disjoint_greedy(centers, radii, self.margin)[:room]
+        return centers[chosen], radii[chosen]
+
+    def refine(self, top, window, ratio=SPLIT_RATIO):
+        """Fast mode: split in two, across their longest side, the cells longer than ``ratio``
+        times ``top`` (the largest clearance) whose clearance bound reaches the candidates'
+        window; the new halves' prototypes converge. Repeats on the halves; how many split."""
+        store = self.prototypes
+        total = 0
+        for _ in range(4 * self.dim):
+            points, clearance = store.all()
+            sides = store.cell_upper - store.cell_lower
+            longest = sides.max(axis=1)
+            # Clearance is 1-Lipschitz: nowhere in the cell above the prototype's plus the way
+            # to the farthest corner (a bound tighter than the stored reach for cells not moved).
+            farthest = np.maximum(points - store.cell_lower, store.cell_upper - points)
+            bound = np.minimum(store.reach, clearance + np.linalg.norm(farthest, axis=1))
+            split = (longest > ratio * top) & (bound >= (1 - window) * top) & (longest > 1e3 * self.margin)
+            ids = np.flatnonzero(split)[: max(0, MAX_PROTOTYPES - len(store))]
+            if len(ids) == 0:
+                break
+            self._split(ids, points[ids], sides[ids])
+            total += len(ids)
+        return total
+
+    def _split(self, ids, points, sides):
+        """Split cells ``ids`` in two across their longest side; the half that holds the prototype
+        (``points``) keeps it, still a local maximum there, and the other half gets a new one."""
+        store = self.prototypes
+        rows, axis = np.arange(len(ids)), np.argmax(sides, axis=1)
+        lower, upper = store.cell_lower[ids], store.cell_upper[ids]
+        middle = 0.5 * (lower[rows, axis] + upper[rows, axis])
+        low_half = points[rows, axis] < middle
+        kept_lower, kept_upper, other_lower, other_upper = lower.copy(), upper.copy(), lower.copy(), upper.copy()
+        kept_upper[rows, axis] = np.where(low_half, middle, upper[rows, axis])
+        kept_lower[rows, axis] = np.where(low_half, lower[rows, axis], middle)
+        other_lower[rows, axis] = np.where(low_half, middle, lower[rows, axis])
+        other_upper[rows, axis] = np.where(low_half, upper[rows, axis], middle)
+        new_lower, new_upper = np.concatenate([kept_lower, other_lower]), np.concatenate([kept_upper, other_upper])
+        centres = 0.5 * (new_lower + new_upper)
+        centre_distance = self.shape._distance(centres)
+        half_diagonal = 0.5 * np.linalg.norm(new_upper - new_lower, axis=1)
+        reach = np.minimum(np.tile(store.reach[ids], 2), -centre_distance + half_diagonal)
+        wall = -centre_distance - WALL_SLACK * self.margin
+        new = store.split(ids, new_lower, new_upper, reach, wall, centres[len(ids):], np.full(len(ids), -np.inf))
+        for start in range(0, len(new), 8 * REVIVE_CHUNK):  # bounded memory for the random starts
+            self.reconverge(new[start : start + 8 * REVIVE_CHUNK])
+
     def insert(self, centers, radii, round_index):
         needed = self.count + len(radii)
         if needed > len(self.radii):
@@ -258,6 +350,59 @@ class _ProtoSphere:
         self.count = needed  # last, so an interrupt never leaves half a sphere
 
 
+def nearest_sphere(points, centers, radii):
+    """Per point (n, d), the sphere (``centers`` (k, d), ``radii`` (k,)) with the smallest gap
+    ``|p - c| - r``, the first of equals: (n,) int64.
+
+    Many spheres (a fast-mode round): among each point's nearest centres, enough of them that
+    no farther sphere can be nearer (radii differ by at most the largest).
+    """
+    if len(radii) <= NEAREST_BY_SEARCH:
+        offsets = points[:, None, :] - centers  # (n, k, d)
+        return np.argmin(np.linalg.norm(offsets, axis=2) - radii, axis=1)
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(centers)
+    distance, _ = tree.query(points, k=1)
+    best = np.empty(len(points), dtype=np.int64)
+    # Any sphere nearer by gap has its centre within (nearest centre's distance + largest radius).
+    candidates = tree.query_ball_point(points, distance + float(radii.max()))
+    for i, near in enumerate(candidates):
+        near = np.sort(np.asarray(near, dtype=np.int64))
+        gaps = np.linalg.norm(points[i] - centers[near], axis=1) - radii[near]
+        best[i] = near[np.argmin(gaps)]
+    return best
+
+
+def disjoint_greedy(centers, radii, margin):
+    """Positions of a greedy disjoint subset: each sphere is kept unless it comes within
+    ``margin`` of one kept before it. ``centers`` (k, d), ``radii`` (k,) in priority order.
+
+    Returns (j,) int64 positions, ascending.
+    """
+    from scipy.spatial import cKDTree
+
+    count = len(radii)
+    if count <= 1:
+        return np.arange(count)
+    pairs = cKDTree(centers).query_pairs(2 * float(radii.max()) + margin, output_type="ndarray")
+    if len(pairs) == 0:
+        return np.arange(count)
+    first, second = pairs.min(axis=1), pairs.max(axis=1)
+    gap = np.linalg.norm(centers[first] - centers[second], axis=1) - radii[first] - radii[second]
+    first, second = first[gap < margin], second[gap < margin]
+    order = np.argsort(first, kind="stable")
+    first, second = first[order], second[order]
+    starts = np.searchsorted(first, np.arange(count + 1))
+    blocked = np.zeros(count, dtype=bool)
+    kept = []
+    for i in range(count):  # the sequential greedy rule; pairs are few and sorted by the larger
+        if not blocked[i]:
+            kept.append(i)
+            blocked[second[starts[i] : starts[i + 1]]] = True
+    return np.array(kept, dtype=np.int64)
+
+
 def pack(
     shape: Oracle,
     n: int = 1000,
@@ -268,6 +413,7 @@ def pack(
     grid=None,
     iterations: int = 50,
     batch: int = 1,
+    mode: str = "faithful",
     restarts: int = 8,
     seed: int | None = 0,
     backend=None,
@@ -293,7 +439,14 @@ def pack(
     iterations : int
         Steps of each prototype's convergence (the paper uses 50).
     batch : int
-        Up to this many mutually disjoint spheres per round; 1 is the paper's exact greedy order.
+        Faithful mode: up to this many mutually disjoint spheres per round; 1 is the paper's
+        exact greedy order.
+    mode : "faithful" or "fast"
+        ``"faithful"``: the paper's rounds on a fixed grid (with ``batch``). ``"fast"``: every
+        candidate within ``FAST_WINDOW`` (10%) of the largest clearance becomes a sphere in one
+        round where it is disjoint from the larger ones, and cells split where their gaps have
+        become small against them; for large counts (see docs/benchmarks.md for its fill
+        against the faithful mode's).
     restarts : int
         Random points tried per cell when a prototype restarts; the best one starts.
     seed : int or None
@@ -316,12 +469,14 @@ def pack(
     shape = as_oracle(shape)
     check_compatible(shape)
     _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts)
+    if mode not in ("faithful", "fast"):
+        raise ParameterError(f"mode must be 'faithful' or 'fast', got {mode!r}")
     check_packable(shape)
     backend = get_backend(backend, device=device, shape=shape)
     counts = grid_counts(shape.bounds, grid)
     params = dict(
         n=int(n), min_radius=float(min_radius), fill=fill, time_budget=time_budget,
-        grid=counts.tolist(), iterations=int(iterations), batch=int(batch),
+        grid=counts.tolist(), iterations=int(iterations), batch=int(batch), mode=mode,
         restarts=int(restarts), seed=seed, backend=backend.name, device=str(getattr(backend, "device", "cpu")),
         eps_start=EPS_START, eps_end=EPS_END, cooling_power=COOLING_POWER,
         polish_iterations=POLISH_ITERATIONS, polish_window=POLISH_WINDOW, safety_margin=SAFETY_MARGIN,
@@ -338,6 +493,13 @@ def pack(
     times, totals, fills = [], [], []
     covered = 0.0
     stop_reason = "count"
+    fast = mode == "fast"
+    if fast:
+        def choose(min_radius, room):
+            return state.choose_window(FAST_WINDOW, min_radius, room)
+    else:
+        def choose(min_radius, room):
+            return state.choose(int(batch), min_radius, room)
     show = sys.stderr.isatty() if progress is None else progress
     bar = tqdm(total=int(n), unit="sphere", disable=not show, dynamic_ncols=True)
     try:
@@ -351,9 +513,9 @@ def pack(
             if time_budget is not None and time.perf_counter() - started >= time_budget:
                 stop_reason = "time"
                 break
-            centers, radii = state.choose(int(batch), min_radius, int(n) - state.count)
+            centers, radii = choose(min_radius, int(n) - state.count)
             if len(radii) == 0 and state.revive():
-                centers, radii = state.choose(int(batch), min_radius, int(n) - state.count)
+                centers, radii = choose(min_radius, int(n) - state.count)
             if len(radii) == 0:
                 stop_reason = "min_radius" if min_radius > 0 else "no_room"
                 break
@@ -362,6 +524,8 @@ def pack(
             touched, points = state.prototypes.touched(centers, radii)
             if len(touched):
                 state.reconverge(touched, points, centers, radii)
+            if fast:
+                state.refine(float(radii[0]), FAST_WINDOW)
             times.append(time.perf_counter() - started)
             totals.append(state.count)
             fills.append(covered / volume.value)

@@ -66,7 +66,7 @@ class Backend:
         direction array may have no rows, which spares the compiled backends that work."""
         raise NotImplementedError
 
-    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
+    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None):
         """Move each prototype ``p <- p + eps * (p - q)`` away from its nearest obstacle point ``q``.
 
         Parameters
@@ -77,6 +77,10 @@ class Backend:
             As in :meth:`clearance`.
         steps : (T,) float64
             The cooling schedule: ``eps`` of each iteration.
+        wall : (n,) float64, optional
+            A lower bound of the boundary's distance at each cell's centre. Where a sphere is
+            nearer than ``wall - |x - centre|``, the boundary cannot be nearest and the shape's
+            distance is not evaluated: the same result, faster deep inside. None: always evaluate.
 
         Returns
         -------
@@ -87,7 +91,7 @@ class Backend:
         """
         raise NotImplementedError
 
-    def near_spheres(self, box_lower, box_upper, reach, centers, radii) -> np.ndarray:
+    def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
         """Spheres whose surface comes within ``reach`` of each box.
 
         Parameters
@@ -97,10 +101,16 @@ class Backend:
             Upper bound of the clearance of any point of the box.
         centers : (m, d) float64 and radii : (m,) float64
 
+        return_bound : bool
+            Also return the tightened reach: no point of a box is farther than half its diagonal
+            from its centre, so its clearance is below the centre's gap to any sphere plus that.
+
         Returns
         -------
         (n, k) int64
-            Indices per box, padded with ``m``.
+            Indices per box, padded with ``m``; the spheres within the tightened reach.
+        (n,) float64
+            The tightened reach, with ``return_bound``: a clearance bound for the stored cells.
         """
         raise NotImplementedError
 
@@ -108,7 +118,7 @@ class Backend:
         """(n,) bool: prototypes whose clearance ball meets one of the new spheres (k, d), (k,)."""
         raise NotImplementedError
 
-    def prototypes(self, shape, cell_lower, cell_upper, reach, points, clearance):
+    def prototypes(self, shape, cell_lower, cell_upper, reach, points, clearance, wall=None):
         """The driver's prototype store (:mod:`ndpack.backends.prototypes`), in this backend's memory.
 
         CPU backends keep it on the host; GPU backends override this to keep it on their device.
@@ -116,10 +126,15 @@ class Backend:
         """
         from .prototypes import HostPrototypes
 
-        return HostPrototypes(self, shape, cell_lower, cell_upper, reach, points, clearance)
+        return HostPrototypes(self, shape, cell_lower, cell_upper, reach, points, clearance, wall)
 
     def __repr__(self) -> str:
         return f"<ndpack backend {self.name!r}>"
+
+
+def no_wall(count: int) -> np.ndarray:
+    """(count,) walls that never spare a distance evaluation (see :meth:`Backend.converge`)."""
+    return np.full(count, -np.inf)
 
 
 def compiled_program(shape):

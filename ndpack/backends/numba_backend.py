@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .base import Backend, compiled_program
+from .base import Backend, compiled_program, no_wall
 
 #: The per-point functions, as text (see numba_kernels.py).
 KERNELS = Path(__file__).with_name("numba_kernels.py").read_text()
@@ -27,9 +27,9 @@ def distance_all(points, prm, out):
         out[i] = sd(points[i], prm)
 
 
-def converge_all(points, lower, upper, prm, centers, radii, nbr, steps, out_points, out_clearance):
+def converge_all(points, lower, upper, wall, prm, centers, radii, nbr, steps, out_points, out_clearance):
     for i in prange(points.shape[0]):
-        converge_one(i, points, lower, upper, prm, centers, radii, nbr, steps, out_points, out_clearance)
+        converge_one(i, points, lower, upper, wall, prm, centers, radii, nbr, steps, out_points, out_clearance)
 
 
 def near_count(lower, upper, reach, centers, radii, counts, out):
@@ -45,12 +45,36 @@ def near_fill(lower, upper, reach, centers, radii, out):
 def touched_all(points, clearance, centers, radii, out):
     for i in prange(points.shape[0]):
         touched_one(i, points, clearance, centers, radii, out)
+
+
+def index_insert_range(start, stop, centers, radii, origin, top, heads, nxt, level_of, level_head, level_next,
+                       level_count, level_rmax):
+    for s in range(start, stop):
+        index_insert(s, centers, radii, origin, top, heads, nxt, level_of, level_head, level_next, level_count,
+                     level_rmax)
+
+
+def index_bound(lower, upper, reach, centers, radii, origin, top, heads, nxt, level_of, level_head, level_next,
+                level_count, level_rmax, out):
+    for b in prange(lower.shape[0]):
+        out[b] = index_near(b, lower, upper, reach[b], 0, centers, radii, origin, top, heads, nxt, level_of,
+                            level_head, level_next, level_count, level_rmax, heads.reshape(1, -1), 0)[0]
+
+
+def index_fill(lower, upper, bound, centers, radii, origin, top, heads, nxt, level_of, level_head, level_next,
+               level_count, level_rmax, counts, out):
+    for b in prange(lower.shape[0]):
+        counts[b] = index_near(b, lower, upper, bound[b], 1, centers, radii, origin, top, heads, nxt, level_of,
+                               level_head, level_next, level_count, level_rmax, out, out.shape[1])[1]
 '''
 
 #: Central-difference step, as a fraction of the shape's scale: float64 rounding in the
 #: difference is about 1e-16 / 1e-6 of the gradient, truncation about 1e-12 for unit curvature.
 FD_STEP = 1e-6
-ENTRY_NAMES = ("distance_all", "clearance_all", "converge_all", "near_count", "near_fill", "touched_all")
+#: Above this many new spheres, :meth:`NumbaBackend.touched` indexes them instead of testing all.
+INDEX_NEW_SPHERES = 32
+ENTRY_NAMES = ("distance_all", "clearance_all", "converge_all", "near_count", "near_fill", "touched_all", "index_bound",
+               "index_fill")
 
 
 def _jit(namespace, names):
@@ -79,6 +103,7 @@ class NumbaBackend(Backend):
         self.numba = numba
         self.threads = threads
         self._namespaces = {}  # id(program) -> (program, namespace)
+        self._indexes = {}  # dim -> SphereIndex of the spheres last asked about
 
     def _kernels(self, shape):
         from ..kernels.compile import numba_namespace
@@ -114,32 +139,57 @@ class NumbaBackend(Backend):
         self._run(namespace["distance_all"], _f64(points), params, out)
         return out
 
-    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
+    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None):
         namespace, params = self._kernels(shape)
         out_points = np.empty_like(points)
         out_clearance = np.empty(len(points))
-        self._run(namespace["converge_all"], _f64(points), _f64(cell_lower), _f64(cell_upper), params,
+        self._run(namespace["converge_all"], _f64(points), _f64(cell_lower), _f64(cell_upper),
+                  _f64(no_wall(len(points)) if wall is None else wall), params,
                   _f64(centers), _f64(radii), _i64(neighbours), _f64(steps), out_points, out_clearance)
         return out_points, out_clearance
 
-    def near_spheres(self, box_lower, box_upper, reach, centers, radii):
+    def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
         namespace = _geometry(box_lower.shape[1])
         count = len(box_lower)
         if len(centers) == 0 or count == 0:
-            return np.zeros((count, 0), dtype=np.int64)
+            table = np.zeros((count, 0), dtype=np.int64)
+            return (table, _f64(reach).copy()) if return_bound else table
+        centers, radii = _f64(centers), _f64(radii)
+        index = self._index(box_lower.shape[1]).sync(centers, radii)
+        lower, upper = _f64(box_lower), _f64(box_upper)
+        bound = np.empty(count)
+        self._run(namespace["index_bound"], lower, upper, _f64(reach), centers, radii, *index, bound)
         counts = np.empty(count, dtype=np.int64)
-        args = (_f64(box_lower), _f64(box_upper), _f64(reach), _f64(centers), _f64(radii))
-        self._run(namespace["near_count"], *args, counts, np.empty((count, 0), dtype=np.int64))
-        out = np.full((count, int(counts.max())), len(centers), dtype=np.int64)
-        self._run(namespace["near_fill"], *args, out)
-        return out
+        self._run(namespace["index_fill"], lower, upper, bound, centers, radii, *index, counts,
+                  np.empty((count, 0), dtype=np.int64))
+        table = np.full((count, int(counts.max())), len(centers), dtype=np.int64)
+        self._run(namespace["index_fill"], lower, upper, bound, centers, radii, *index, counts, table)
+        table.sort(axis=1)  # the order of the reference (ascending ids, padding last)
+        return (table, bound) if return_bound else table
+
+    def _index(self, dim):
+        """The sphere index of this backend's current packing (one per dimension)."""
+        from .sphere_index import SphereIndex
+
+        if dim not in self._indexes:
+            self._indexes[dim] = SphereIndex(_geometry(dim)["index_insert_range"])
+        return self._indexes[dim]
 
     def touched(self, points, clearance, new_centers, new_radii):
         namespace = _geometry(points.shape[1])
-        out = np.empty(len(points), dtype=np.bool_)
-        self._run(namespace["touched_all"], _f64(points), _f64(clearance), _f64(new_centers),
-                  _f64(new_radii), out)
-        return out
+        points, clearance = _f64(points), _f64(clearance)
+        if len(new_radii) <= INDEX_NEW_SPHERES:
+            out = np.empty(len(points), dtype=np.bool_)
+            self._run(namespace["touched_all"], points, clearance, _f64(new_centers), _f64(new_radii), out)
+            return out
+        # Many new spheres (a large batch): index them, so each prototype looks only nearby.
+        from .sphere_index import SphereIndex
+
+        new_centers, new_radii = _f64(new_centers), _f64(new_radii)
+        index = SphereIndex(namespace["index_insert_range"]).sync(new_centers, new_radii)
+        bound = np.empty(len(points))
+        self._run(namespace["index_bound"], points, points, clearance, new_centers, new_radii, *index, bound)
+        return bound < clearance
 
 
 _geometry_cache = {}

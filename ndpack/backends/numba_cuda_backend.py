@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import BackendError
-from .base import Backend, compiled_program
+from .base import Backend, compiled_program, no_wall
 from .device_spheres import DeviceSpheres
 from .numba_backend import FD_STEP, KERNELS
 
@@ -33,10 +33,10 @@ def distance_all(points, prm, out):
         out[i] = sd(points[i], prm)
 
 
-def converge_all(points, lower, upper, prm, centers, radii, nbr, steps, out_points, out_clearance):
+def converge_all(points, lower, upper, wall, prm, centers, radii, nbr, steps, out_points, out_clearance):
     i = cuda.grid(1)
     if i < points.shape[0]:
-        converge_one(i, points, lower, upper, prm, centers, radii, nbr, steps, out_points, out_clearance)
+        converge_one(i, points, lower, upper, wall, prm, centers, radii, nbr, steps, out_points, out_clearance)
 
 
 def near_count(lower, upper, reach, centers, radii, counts, out):
@@ -149,11 +149,11 @@ def near_finish(found, sphere_count, width, out):
         cuda.atomic.max(width, 0, found[b])
 
 
-def move_ids(ids, starts, tries, points, clearance, polished, lower, upper, prm, centers, radii, nbr, steps,
-             h, polish):
+def move_ids(ids, starts, tries, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
+             steps, h, polish):
     b = cuda.grid(1)
     if b < ids.shape[0]:
-        move_one(b, ids, starts, tries, points, clearance, polished, lower, upper, prm, centers, radii, nbr,
+        move_one(b, ids, starts, tries, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
                  steps, polish)
 '''
 ENTRY_NAMES = ("distance_all", "clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
@@ -248,18 +248,21 @@ class NumbaCudaBackend(Backend):
         self._launch(namespace["distance_all"], len(points), self.cuda.to_device(_f64(points)), params, out)
         return out.copy_to_host()[: len(points)]
 
-    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
+    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None):
         namespace, params = self._kernels(shape)
         d_centers, d_radii, table = self._spheres_and_table(centers, radii, neighbours)
         to = self.cuda.to_device
         out_points = self.cuda.device_array(points.shape, dtype=np.float64)
         out_clearance = self.cuda.device_array(len(points), dtype=np.float64)
+        wall = no_wall(len(points)) if wall is None else wall
         self._launch(namespace["converge_all"], len(points), to(_f64(points)), to(_f64(cell_lower)),
-                     to(_f64(cell_upper)), params, d_centers, d_radii, table, to(_f64(steps)),
+                     to(_f64(cell_upper)), to(_f64(wall)), params, d_centers, d_radii, table, to(_f64(steps)),
                      out_points, out_clearance)
         return out_points.copy_to_host(), out_clearance.copy_to_host()
 
-    def near_spheres(self, box_lower, box_upper, reach, centers, radii):
+    def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
+        if return_bound:  # the device store tightens its cells' reach on the device instead
+            raise NotImplementedError(f"{self.name}.near_spheres(return_bound=True)")
         count = len(box_lower)
         if len(centers) == 0 or count == 0:
             return np.zeros((count, 0), dtype=np.int64)
@@ -275,11 +278,11 @@ class NumbaCudaBackend(Backend):
             self._launch(namespace["near_fill"], count, *args, out)
         return out.copy_to_host()[:, :width]
 
-    def prototypes(self, shape, cell_lower, cell_upper, reach, points, clearance):
+    def prototypes(self, shape, cell_lower, cell_upper, reach, points, clearance, wall=None):
         """The prototypes on the GPU (see :class:`~ndpack.backends.prototypes.DevicePrototypes`)."""
         from .prototypes import DevicePrototypes
 
-        return DevicePrototypes(_CudaDevice(self, shape), cell_lower, cell_upper, reach, points, clearance)
+        return DevicePrototypes(_CudaDevice(self, shape), cell_lower, cell_upper, reach, points, clearance, wall)
 
     def _device_spheres(self, centers, radii):
         """Device copies of the spheres; one at infinity stands in for none, so no array is empty."""

@@ -13,12 +13,15 @@ Array arguments: ``points``, ``lower``, ``upper``, ``centers`` (n, D) float64; `
 # ruff: noqa: F821  (D, H, sd and point exist where this text runs)
 
 
-def nearest_obstacle(x, prm, centers, radii, nbr, row):
+def nearest_obstacle(x, prm, centers, radii, nbr, row, floor):
     """Clearance of ``x`` and its nearest sphere (-1 when the shape's boundary is nearest).
 
+    ``floor`` is a lower bound of the boundary's distance at ``x`` (from the cell's wall, see
+    :func:`wall_floor`): a sphere nearer than that is nearest without evaluating the shape, which
+    spares the (mesh) distance deep inside. The result is the same as evaluating it.
     The row ``nbr[row]`` may list the spheres in any order: ties resolve by sphere id.
     """
-    clearance = -sd(x, prm)
+    gap_min = math.inf
     nearest = -1
     count = radii.shape[0]
     for j in range(nbr.shape[1]):
@@ -30,20 +33,35 @@ def nearest_obstacle(x, prm, centers, radii, nbr, row):
                 length2 += t * t
             gap = math.sqrt(length2) - radii[s]
             # Equal gaps: the lower sphere id wins, whatever the table's order (as the
-            # reference's argmin over ascending ids); the boundary wins over an equal sphere.
-            if gap < clearance or (gap == clearance and nearest > s):
-                clearance = gap
+            # reference's argmin over ascending ids).
+            if gap < gap_min or (gap == gap_min and nearest > s):
+                gap_min = gap
                 nearest = s
-    return clearance, nearest
+    if nearest >= 0 and gap_min < floor:
+        return gap_min, nearest
+    boundary = -sd(x, prm)
+    if gap_min < boundary:  # the boundary wins over an equal sphere
+        return gap_min, nearest
+    return boundary, -1
 
 
-def free_space(x, g, prm, centers, radii, nbr, row):
+def wall_floor(x, lower, upper, wall, cell):
+    """Lower bound of the boundary's distance at ``x``: the cell centre's distance ``wall[cell]``
+    (slack already taken off) less the way from the centre, as the distance is 1-Lipschitz."""
+    length2 = 0.0
+    for k in range(D):
+        t = x[k] - 0.5 * (lower[cell, k] + upper[cell, k])
+        length2 += t * t
+    return wall[cell] - math.sqrt(length2)
+
+
+def free_space(x, g, prm, centers, radii, nbr, row, floor):
     """Clearance of ``x`` and, in ``g``, the direction away from its nearest obstacle.
 
     Away from the shape's boundary it is ``-grad sd`` by central differences of step ``H``
     (the reference uses the analytic gradient); away from a sphere, the unit vector from its centre.
     """
-    clearance, nearest = nearest_obstacle(x, prm, centers, radii, nbr, row)
+    clearance, nearest = nearest_obstacle(x, prm, centers, radii, nbr, row, floor)
     if nearest < 0:
         for k in range(D):
             xk = x[k]
@@ -73,25 +91,25 @@ def clearance_one(i, points, prm, centers, radii, nbr, out, out_direction):
     g = point()
     for k in range(D):
         x[k] = points[i, k]
-    out[i] = free_space(x, g, prm, centers, radii, nbr, i)
+    out[i] = free_space(x, g, prm, centers, radii, nbr, i, -math.inf)
     if out_direction.shape[0] > i:
         for k in range(D):
             out_direction[i, k] = g[k]
 
 
-def converge_one(i, points, lower, upper, prm, centers, radii, nbr, steps, out_points, out_clearance):
+def converge_one(i, points, lower, upper, wall, prm, centers, radii, nbr, steps, out_points, out_clearance):
     """Converge point ``i`` in its cell (row ``i`` of every table) into the outputs."""
     x = point()
     g = point()
     best = point()
     for k in range(D):
         x[k] = points[i, k]
-    out_clearance[i] = converge_from(x, g, best, i, i, lower, upper, prm, centers, radii, nbr, steps)
+    out_clearance[i] = converge_from(x, g, best, i, i, lower, upper, wall, prm, centers, radii, nbr, steps)
     for k in range(D):
         out_points[i, k] = best[k]
 
 
-def converge_from(x, g, best, cell, row, lower, upper, prm, centers, radii, nbr, steps):
+def converge_from(x, g, best, cell, row, lower, upper, wall, prm, centers, radii, nbr, steps):
     """``p <- p + eps |c| g`` from ``x``, clipped to cell ``cell``, with neighbour row ``row``.
 
     Leaves the best point seen in ``best`` (as the reference does) and returns its clearance;
@@ -102,7 +120,7 @@ def converge_from(x, g, best, cell, row, lower, upper, prm, centers, radii, nbr,
     best_clearance = -math.inf
     count = steps.shape[0]
     for t in range(count + 1):
-        c = free_space(x, g, prm, centers, radii, nbr, row)
+        c = free_space(x, g, prm, centers, radii, nbr, row, wall_floor(x, lower, upper, wall, cell))
         if c > best_clearance:
             best_clearance = c
             for k in range(D):
@@ -114,7 +132,7 @@ def converge_from(x, g, best, cell, row, lower, upper, prm, centers, radii, nbr,
     return best_clearance
 
 
-def move_one(b, ids, starts, tries, points, clearance, polished, lower, upper, prm, centers, radii, nbr,
+def move_one(b, ids, starts, tries, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
              steps, polish):
     """Move prototype ``ids[b]`` in place: from the best of its point and ``starts[:tries, b]``,
     converge; keep the result (``polish`` 0), or keep it only if better and mark it polished (1)."""
@@ -125,16 +143,16 @@ def move_one(b, ids, starts, tries, points, clearance, polished, lower, upper, p
     for k in range(D):
         x[k] = points[i, k]
     if tries > 0:
-        top = nearest_obstacle(x, prm, centers, radii, nbr, b)[0]
+        top = nearest_obstacle(x, prm, centers, radii, nbr, b, wall_floor(x, lower, upper, wall, i))[0]
         for t in range(tries):
             for k in range(D):
                 g[k] = starts[t, b, k]
-            c = nearest_obstacle(g, prm, centers, radii, nbr, b)[0]
+            c = nearest_obstacle(g, prm, centers, radii, nbr, b, wall_floor(g, lower, upper, wall, i))[0]
             if c > top:
                 top = c
                 for k in range(D):
                     x[k] = g[k]
-    c = converge_from(x, g, best, i, b, lower, upper, prm, centers, radii, nbr, steps)
+    c = converge_from(x, g, best, i, b, lower, upper, wall, prm, centers, radii, nbr, steps)
     if polish == 0 or c > clearance[i]:
         clearance[i] = c
         for k in range(D):
@@ -182,3 +200,125 @@ def touches(i, points, clearance, centers, radii):
         if math.sqrt(length2) - radii[s] < clearance[i]:
             return True
     return False
+
+
+# ---------------------------------------------------------------------------- the sphere index
+# A hashed grid per octave of radius (see ndpack.backends.sphere_index). Level ``l`` has cells of
+# side ``top * 0.5**l`` and holds the spheres of radius about a quarter of that (level 0 also the
+# larger ones), each in the cell of its centre, in a linked list per hash bucket; ``level_rmax``
+# is each level's largest radius.
+
+def index_level(r, top, levels):
+    """The finest level whose cells are at least four times ``r``."""
+    level = 0
+    side = top
+    while level < levels - 1 and 0.5 * side >= 4.0 * r:
+        side = 0.5 * side
+        level += 1
+    return level
+
+
+def index_bucket(level, cell, mask):
+    """Hash bucket of grid cell ``cell`` (whole numbers as floats) of ``level``."""
+    key = level + 1
+    for k in range(D):
+        key = key * 1000003 + int(cell[k])  # int64 wraps, which is fine for a hash
+    key = key ^ (key >> 29)
+    return key & mask
+
+
+def index_insert(s, centers, radii, origin, top, heads, nxt, level_of, level_head, level_next, level_count,
+                 level_rmax):
+    """Put sphere ``s`` in its level's grid and in its level's list (serial: not thread-safe)."""
+    levels = level_head.shape[0]
+    level = index_level(radii[s], top, levels)
+    side = top * 0.5 ** level
+    cell = point()
+    for k in range(D):
+        cell[k] = math.floor((centers[s, k] - origin[k]) / side)
+    bucket = index_bucket(level, cell, heads.shape[0] - 1)
+    nxt[s] = heads[bucket]
+    heads[bucket] = s
+    level_of[s] = level
+    level_next[s] = level_head[level]
+    level_head[level] = s
+    level_count[level] += 1
+    level_rmax[level] = max(level_rmax[level], radii[s])
+
+
+def index_near(b, lower, upper, bound, counting, centers, radii, origin, top, heads, nxt, level_of, level_head,
+               level_next, level_count, level_rmax, out, width):
+    """The spheres near box ``b`` (``lower[b]``, ``upper[b]``), found through the index.
+
+    ``counting`` 0: returns ``bound`` tightened by every sphere within it of the box (the upper
+    bound of the clearance in the box: a sphere's gap from the box centre plus half a diagonal).
+    ``counting`` 1: counts the spheres that come within ``bound`` of the box, and writes the
+    first ``width`` of them into ``out[b]``. Both visit the cells of each level within ``bound``
+    (plus the level's largest radius) of the box, or the level's list where that is shorter.
+    Returns ``(bound, count)``.
+    """
+    half2 = 0.0
+    for k in range(D):
+        half2 += 0.25 * (upper[b, k] - lower[b, k]) ** 2
+    half = math.sqrt(half2)
+    reach = bound
+    found = 0
+    low = point()
+    high = point()
+    cell = point()
+    mask = heads.shape[0] - 1
+    for level in range(level_head.shape[0]):
+        if level_count[level] == 0:
+            continue
+        side = top * 0.5 ** level
+        cells = 1.0
+        for k in range(D):
+            low[k] = math.floor((lower[b, k] - reach - level_rmax[level] - origin[k]) / side)
+            high[k] = math.floor((upper[b, k] + reach + level_rmax[level] - origin[k]) / side)
+            cells *= high[k] - low[k] + 1.0
+        listed = cells > level_count[level]
+        s = level_head[level]
+        if not listed:
+            for k in range(D):
+                cell[k] = low[k]
+            s = heads[index_bucket(level, cell, mask)]
+        while True:
+            if s < 0:
+                if listed:
+                    break
+                k = 0  # the next cell, like an odometer
+                while k < D:
+                    cell[k] += 1.0
+                    if cell[k] <= high[k]:
+                        break
+                    cell[k] = low[k]
+                    k += 1
+                if k == D:
+                    break
+                s = heads[index_bucket(level, cell, mask)]
+                continue
+            mine = listed
+            if not listed and level_of[s] == level:  # skip other cells' spheres in this bucket
+                mine = True
+                for k in range(D):
+                    if math.floor((centers[s, k] - origin[k]) / side) != cell[k]:
+                        mine = False
+                        break
+            if mine:
+                if counting == 0:
+                    length2 = 0.0
+                    for k in range(D):
+                        t = 0.5 * (lower[b, k] + upper[b, k]) - centers[s, k]
+                        length2 += t * t
+                    bound = min(bound, math.sqrt(length2) - radii[s] + half)
+                else:
+                    outside2 = 0.0
+                    for k in range(D):
+                        t = max(lower[b, k] - centers[s, k], centers[s, k] - upper[b, k], 0.0)
+                        outside2 += t * t
+                    if math.sqrt(outside2) - radii[s] <= bound:
+                        if found < width:
+                            out[b, found] = s
+                        found += 1
+            s = level_next[s] if listed else nxt[s]
+    return bound, found

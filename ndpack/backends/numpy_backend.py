@@ -66,7 +66,9 @@ class NumpyBackend(Backend):
         centers, radii = _with_sphere_at_infinity(centers, radii)
         return self._free_space_among(shape, points, centers[neighbours], radii[neighbours])
 
-    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
+    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None):
+        # ``wall`` only lets the compiled backends skip distances that cannot matter; the
+        # reference evaluates them all.
         centers, radii = _with_sphere_at_infinity(centers, radii)
         neighbour_centers, neighbour_radii = centers[neighbours], radii[neighbours]
         points = points.copy()
@@ -84,13 +86,14 @@ class NumpyBackend(Backend):
             np.clip(points, cell_lower, cell_upper, out=points)
         return best_points, best
 
-    def near_spheres(self, box_lower, box_upper, reach, centers, radii):
+    def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
         count, dim = box_lower.shape
         if len(centers) == 0:
-            return np.zeros((count, 0), dtype=np.int64)
+            table = np.zeros((count, 0), dtype=np.int64)
+            return (table, np.asarray(reach, dtype=np.float64).copy()) if return_bound else table
         middles = (box_lower + box_upper) / 2
         half_diagonals = np.linalg.norm(box_upper - box_lower, axis=1) / 2
-        hits = []
+        hits, bounds = [], []
         for part in _chunks(count, len(centers) * dim):
             # Distance from each sphere to each box, and to the box's centre.
             below = box_lower[part, None, :] - centers
@@ -103,6 +106,7 @@ class NumpyBackend(Backend):
             # clearance is below the centre's gap to any sphere plus that: a tighter reach.
             bound = np.minimum(reach[part], centre_gap.min(axis=1) + half_diagonals[part])
             hits.append(box_gap <= bound[:, None])
+            bounds.append(bound)
         hits = np.concatenate(hits)
         width = int(hits.sum(axis=1).max())
         neighbours = np.full((count, width), len(centers), dtype=np.int64)
@@ -110,7 +114,7 @@ class NumpyBackend(Backend):
         # Rank of each hit within its row: its slot in the padded table.
         starts = np.searchsorted(rows, np.arange(count))
         neighbours[rows, np.arange(len(rows)) - starts[rows]] = columns
-        return neighbours
+        return (neighbours, np.concatenate(bounds)) if return_bound else neighbours
 
     def touched(self, points, clearance, new_centers, new_radii):
         result = np.zeros(len(points), dtype=bool)

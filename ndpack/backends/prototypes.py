@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .base import no_wall
+
 #: :meth:`DevicePrototypes.leaders` asks for the prototypes within a window (this fraction) below
 #: the largest clearance, widened by ``WIDEN`` until it holds the leaders and those near them, and
 #: narrowed again (not below the polish window) when it held far more.
@@ -63,13 +65,17 @@ class Prototypes:
         Upper bound of the clearance of any point in each cell (finds the spheres near it).
     points : (n, d) float64 and clearance : (n,) float64
         Starting positions and their clearances.
+    wall : (n,) float64, optional
+        Lower bound of the boundary's distance at each cell's centre (see
+        :meth:`~ndpack.backends.base.Backend.converge`); None evaluates the shape everywhere.
 
     The cell arrays stay on the host too (the driver draws random restarts in them); points,
     clearances and polish flags belong to the subclass.
     """
 
-    def __init__(self, cell_lower, cell_upper, reach, points, clearance):
+    def __init__(self, cell_lower, cell_upper, reach, points, clearance, wall=None):
         self.cell_lower, self.cell_upper, self.reach = cell_lower, cell_upper, reach
+        self.wall = no_wall(len(reach)) if wall is None else np.asarray(wall, dtype=np.float64)
         self.dim = cell_lower.shape[1]
 
     def __len__(self) -> int:
@@ -118,12 +124,32 @@ class Prototypes:
         """Every point (n, d) and clearance (n,) on the host: for results, not for rounds."""
         return self.gather(np.arange(len(self)))
 
+    def clearances(self):
+        """Every clearance (n,) on the host (what adaptive refinement decides by)."""
+        return self.all()[1]
+
+    def split(self, ids, lower, upper, reach, wall, points, clearance):
+        """Shrink cells ``ids`` to ``lower``, ``upper`` (k, d) (their prototypes stay inside) and
+        add prototypes for the rest of each cell: cells ``lower[k:]``... as the other arguments,
+        (k + j, ...) rows in all, with starting ``points`` (j, d) and ``clearance`` (j,) for the new ones.
+
+        Returns the new prototypes' ids (j,) int64.
+        """
+        count = len(ids)
+        self.cell_lower[ids], self.cell_upper[ids] = lower[:count], upper[:count]
+        self.reach[ids], self.wall[ids] = reach[:count], wall[:count]
+        self.cell_lower = np.concatenate([self.cell_lower, lower[count:]])
+        self.cell_upper = np.concatenate([self.cell_upper, upper[count:]])
+        self.reach = np.concatenate([self.reach, reach[count:]])
+        self.wall = np.concatenate([self.wall, wall[count:]])
+        return np.arange(len(self.reach) - len(points), len(self.reach))
+
 
 class HostPrototypes(Prototypes):
     """Prototypes in host memory; the heavy work runs through the backend's array operations."""
 
-    def __init__(self, backend, shape, cell_lower, cell_upper, reach, points, clearance):
-        super().__init__(cell_lower, cell_upper, reach, points, clearance)
+    def __init__(self, backend, shape, cell_lower, cell_upper, reach, points, clearance, wall=None):
+        super().__init__(cell_lower, cell_upper, reach, points, clearance, wall)
         self.backend, self.shape = backend, shape
         self.points, self.clearance = points, clearance
         self.polished = np.zeros(len(points), dtype=bool)
@@ -152,6 +178,16 @@ class HostPrototypes(Prototypes):
     def gather(self, ids):
         return self.points[ids], self.clearance[ids]
 
+    def clearances(self):
+        return self.clearance
+
+    def split(self, ids, lower, upper, reach, wall, points, clearance):
+        new = super().split(ids, lower, upper, reach, wall, points, clearance)
+        self.points = np.concatenate([self.points, points])
+        self.clearance = np.concatenate([self.clearance, clearance])
+        self.polished = np.concatenate([self.polished, np.zeros(len(points), dtype=bool)])
+        return new
+
     def touched(self, new_centers, new_radii):
         ids = np.flatnonzero(self.backend.touched(self.points, self.clearance, new_centers, new_radii))
         return ids, self.points[ids]
@@ -159,11 +195,13 @@ class HostPrototypes(Prototypes):
     def move(self, ids, centers, radii, steps, starts=None, polish=False):
         backend, shape = self.backend, self.shape
         lower, upper = self.cell_lower[ids], self.cell_upper[ids]
-        neighbours = backend.near_spheres(lower, upper, self.reach[ids], centers, radii)
+        neighbours, self.reach[ids] = backend.near_spheres(lower, upper, self.reach[ids], centers, radii,
+                                                           return_bound=True)
         points = self.points[ids]
         if starts is not None:
             points, _ = best_starts(backend, shape, np.concatenate([points[None], starts]), centers, radii, neighbours)
-        points, clearance = backend.converge(shape, points, lower, upper, centers, radii, neighbours, steps)
+        points, clearance = backend.converge(shape, points, lower, upper, centers, radii, neighbours, steps,
+                                             self.wall[ids])
         if polish:
             better = clearance > self.clearance[ids]
             self.points[ids[better]] = points[better]
@@ -202,14 +240,15 @@ class DevicePrototypes(Prototypes):
     #: Answer rows copied back with the counter, at least; more after larger answers.
     FIRST_PREFIX = 64
 
-    def __init__(self, device, cell_lower, cell_upper, reach, points, clearance):
-        super().__init__(cell_lower, cell_upper, reach, points, clearance)
+    def __init__(self, device, cell_lower, cell_upper, reach, points, clearance, wall=None):
+        super().__init__(cell_lower, cell_upper, reach, points, clearance, wall)
         self.device = device
         up = device.upload
         count = len(points)
         self.d_points, self.d_clearance = up(points, "point"), up(clearance, "float")
         self.d_polished = up(np.zeros(count, dtype=np.int64), "index")
         self.d_lower, self.d_upper, self.d_reach = up(cell_lower, "point"), up(cell_upper, "point"), up(reach, "float")
+        self.d_wall = up(self.wall, "float")
         # Answer buffers of the compacting kernels: at most one row per prototype.
         self.answers = (device.empty(count, "index"), device.empty(count, "float"),
                         device.empty(count, "point"), device.empty(count, "index"))
@@ -218,6 +257,14 @@ class DevicePrototypes(Prototypes):
         self.prefix = min(count, self.FIRST_PREFIX)
         self._window = FIRST_WINDOW
         self._steps = {}
+
+    def split(self, ids, lower, upper, reach, wall, points, clearance):
+        # For now the whole set goes back to the host and up again: O(n) copies per refinement.
+        old_points, old_clearance = self.all()
+        new = super().split(ids, lower, upper, reach, wall, points, clearance)
+        self.__init__(self.device, self.cell_lower, self.cell_upper, self.reach,
+                      np.concatenate([old_points, points]), np.concatenate([old_clearance, clearance]), self.wall)
+        return new
 
     def _compact(self, kernel, *args):
         """Run a kernel that appends matches: ids (m,) ascending, their clearances, points (m, d)
@@ -323,5 +370,5 @@ class DevicePrototypes(Prototypes):
         if key not in self._steps:  # the driver's two schedules: copy each once
             self._steps[key] = (steps, device.upload(steps, "float"))
         device.launch("move_ids", count, d_ids, d_starts, tries, self.d_points, self.d_clearance, self.d_polished,
-                      self.d_lower, self.d_upper, device.params, d_centers, d_radii, table,
+                      self.d_lower, self.d_upper, self.d_wall, device.params, d_centers, d_radii, table,
                       self._steps[key][1], device.h, int(polish))

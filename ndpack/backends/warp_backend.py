@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import BackendError
-from .base import Backend, compiled_program
+from .base import Backend, compiled_program, no_wall
 from .device_spheres import DeviceSpheres
 
 KERNELS = Path(__file__).with_name("warp_kernels.py").read_text()
@@ -155,20 +155,23 @@ class WarpBackend(Backend):
                            inputs=[self._points(module, points), params, out])
         return out.numpy().astype(np.float64)
 
-    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps):
+    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None):
         module, params, h = self._module(shape)
+        wall = no_wall(len(points)) if wall is None else wall
         d_centers, d_radii, table = self._spheres_and_table(module, centers, radii, neighbours)
         out_points = self.wp.empty(len(points), dtype=module.VecD, device=self.device)
         out_clearance = self.wp.empty(len(points), dtype=module.F, device=self.device)
         if len(points):
             self.wp.launch(module.converge_all, dim=len(points), device=self.device, inputs=[
                 self._points(module, points), self._points(module, cell_lower), self._points(module, cell_upper),
-                params, d_centers, d_radii, table, self._array(steps, module.F), h, out_points, out_clearance,
+                self._array(wall, module.F), params, d_centers, d_radii, table, self._array(steps, module.F), h, out_points, out_clearance,
             ])
         return (out_points.numpy().reshape(len(points), -1).astype(np.float64),
                 out_clearance.numpy().astype(np.float64))
 
-    def near_spheres(self, box_lower, box_upper, reach, centers, radii):
+    def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
+        if return_bound:  # the device store tightens its cells' reach on the device instead
+            raise NotImplementedError(f"{self.name}.near_spheres(return_bound=True)")
         count = len(box_lower)
         if len(centers) == 0 or count == 0:
             return np.zeros((count, 0), dtype=np.int64)
@@ -186,11 +189,11 @@ class WarpBackend(Backend):
             self.wp.launch(module.near_all, dim=count, device=self.device, inputs=[*args, counts, out])
         return out.numpy()[:, :width].astype(np.int64)
 
-    def prototypes(self, shape, cell_lower, cell_upper, reach, points, clearance):
+    def prototypes(self, shape, cell_lower, cell_upper, reach, points, clearance, wall=None):
         """The prototypes on this backend's device (see :class:`~ndpack.backends.prototypes.DevicePrototypes`)."""
         from .prototypes import DevicePrototypes
 
-        return DevicePrototypes(_WarpDevice(self, shape), cell_lower, cell_upper, reach, points, clearance)
+        return DevicePrototypes(_WarpDevice(self, shape), cell_lower, cell_upper, reach, points, clearance, wall)
 
     def touched(self, points, clearance, new_centers, new_radii):
         if len(points) == 0:

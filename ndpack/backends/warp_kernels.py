@@ -11,32 +11,42 @@ and ``sd(p, prm)``. Every kernel mirrors a step of the NumPy reference
 
 @wp.func
 def nearest_obstacle(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
-                     nbr: wp.array2d(dtype=wp.int32), row: int):
+                     nbr: wp.array2d(dtype=wp.int32), row: int, floor: F):
     """Clearance of ``x`` and its nearest sphere (-1 when the shape's boundary is nearest).
 
-    The row ``nbr[row]`` may list the spheres in any order: ties resolve by sphere id.
+    A sphere nearer than ``floor``, a lower bound of the boundary's distance, is nearest without
+    evaluating the shape (see the Numba kernels). Ties resolve by sphere id, whatever the row's order.
     """
-    clearance = -sd(x, prm)
+    gap_min = F(1.0e30)
     nearest = int(-1)
     count = radii.shape[0]
     for j in range(nbr.shape[1]):
         s = nbr[row, j]
         if s < count:
             gap = wp.length(x - centers[s]) - radii[s]
-            # Equal gaps: the lower sphere id wins, whatever the table's order (as the
-            # reference's argmin over ascending ids); the boundary wins over an equal sphere.
-            if gap < clearance or (gap == clearance and nearest > s):
-                clearance = gap
+            if gap < gap_min or (gap == gap_min and nearest > s):
+                gap_min = gap
                 nearest = s
-    return clearance, nearest
+    if nearest >= 0 and gap_min < floor:
+        return gap_min, nearest
+    boundary = -sd(x, prm)
+    if gap_min < boundary:  # the boundary wins over an equal sphere
+        return gap_min, nearest
+    return boundary, int(-1)
+
+
+@wp.func
+def wall_floor(x: VecD, lower: VecD, upper: VecD, wall: F):
+    """Lower bound of the boundary's distance at ``x``: the cell centre's, less the way from it."""
+    return wall - wp.length(x - F(0.5) * (lower + upper))
 
 
 @wp.func
 def free_space(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
-               nbr: wp.array2d(dtype=wp.int32), row: int, h: F):
+               nbr: wp.array2d(dtype=wp.int32), row: int, h: F, floor: F):
     """Clearance of ``x`` and the direction away from its nearest obstacle (``-grad sd`` by
     central differences of step ``h``, or away from the nearest sphere's centre)."""
-    clearance, nearest = nearest_obstacle(x, prm, centers, radii, nbr, row)
+    clearance, nearest = nearest_obstacle(x, prm, centers, radii, nbr, row, floor)
     g = VecD()
     if nearest < 0:
         for k in range(D):
@@ -67,14 +77,14 @@ def clearance_all(points: wp.array(dtype=VecD), prm: wp.array(dtype=F), centers:
                   radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32), h: F, out: wp.array(dtype=F),
                   out_direction: wp.array(dtype=VecD)):
     i = wp.tid()
-    c, g = free_space(points[i], prm, centers, radii, nbr, i, h)
+    c, g = free_space(points[i], prm, centers, radii, nbr, i, h, F(-1.0e30))
     out[i] = c
     if out_direction.shape[0] > i:
         out_direction[i] = g
 
 
 @wp.func
-def converge_from(x: VecD, lower: VecD, upper: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD),
+def converge_from(x: VecD, lower: VecD, upper: VecD, wall: F, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD),
                   radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32), row: int, steps: wp.array(dtype=F),
                   h: F):
     """``p <- p + eps |c| g`` from ``x``, clipped to the cell; the best point seen and its clearance."""
@@ -82,7 +92,7 @@ def converge_from(x: VecD, lower: VecD, upper: VecD, prm: wp.array(dtype=F), cen
     best_clearance = F(-1.0e30)
     count = steps.shape[0]
     for t in range(count + 1):
-        c, g = free_space(x, prm, centers, radii, nbr, row, h)
+        c, g = free_space(x, prm, centers, radii, nbr, row, h, wall_floor(x, lower, upper, wall))
         if c > best_clearance:
             best_clearance = c
             best = x
@@ -95,11 +105,11 @@ def converge_from(x: VecD, lower: VecD, upper: VecD, prm: wp.array(dtype=F), cen
 
 @wp.kernel
 def converge_all(points: wp.array(dtype=VecD), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
-                 prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
+                 wall: wp.array(dtype=F), prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
                  nbr: wp.array2d(dtype=wp.int32), steps: wp.array(dtype=F), h: F,
                  out_points: wp.array(dtype=VecD), out_clearance: wp.array(dtype=F)):
     i = wp.tid()
-    best, best_clearance = converge_from(points[i], lower[i], upper[i], prm, centers, radii, nbr, i, steps, h)
+    best, best_clearance = converge_from(points[i], lower[i], upper[i], wall[i], prm, centers, radii, nbr, i, steps, h)
     out_points[i] = best
     out_clearance[i] = best_clearance
 
@@ -268,22 +278,23 @@ def near_finish(found: wp.array(dtype=wp.int32), sphere_count: int, width: wp.ar
 @wp.kernel
 def move_ids(ids: wp.array(dtype=wp.int32), starts: wp.array2d(dtype=VecD), tries: int, points: wp.array(dtype=VecD),
              clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD),
-             upper: wp.array(dtype=VecD), prm: wp.array(dtype=F), centers: wp.array(dtype=VecD),
-             radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32), steps: wp.array(dtype=F), h: F, polish: int):
+             upper: wp.array(dtype=VecD), wall: wp.array(dtype=F), prm: wp.array(dtype=F),
+             centers: wp.array(dtype=VecD), radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32),
+             steps: wp.array(dtype=F), h: F, polish: int):
     """Move prototype ``ids[b]`` in place: from the best of its point and ``starts[:tries, b]``,
     converge; keep the result (``polish`` 0), or keep it only if better and mark it polished (1)."""
     b = wp.tid()
     i = ids[b]
     x = points[i]
     if tries > 0:
-        top, nearest = nearest_obstacle(x, prm, centers, radii, nbr, b)
+        top, nearest = nearest_obstacle(x, prm, centers, radii, nbr, b, wall_floor(x, lower[i], upper[i], wall[i]))
         for t in range(tries):
             y = starts[t, b]
-            c, s = nearest_obstacle(y, prm, centers, radii, nbr, b)
+            c, s = nearest_obstacle(y, prm, centers, radii, nbr, b, wall_floor(y, lower[i], upper[i], wall[i]))
             if c > top:
                 top = c
                 x = y
-    best, best_clearance = converge_from(x, lower[i], upper[i], prm, centers, radii, nbr, b, steps, h)
+    best, best_clearance = converge_from(x, lower[i], upper[i], wall[i], prm, centers, radii, nbr, b, steps, h)
     if polish == 0 or best_clearance > clearance[i]:
         points[i] = best
         clearance[i] = best_clearance

@@ -1,0 +1,81 @@
+"""A spatial index of the inserted spheres, for radii that span many orders of magnitude.
+
+A greedy packing's radii run from a third of the shape down to a millionth of it, so no single
+grid suits them. The index keeps one hashed grid per octave of radius: level ``l`` has cells of
+side ``top / 2**l`` and holds the spheres of radius about a quarter of that, each in the cell of its
+centre. A query for the spheres near a box visits, per level that holds any sphere, the cells
+within reach of the box, or the level's whole list when that is shorter (the few largest spheres,
+or a level with fewer spheres than cells to visit). Work per query is then bounded by what is near
+the box, not by the packing's size.
+
+Buckets are singly linked lists threaded through the sphere ids (``heads`` per bucket, ``next``
+per sphere), so inserting a sphere is O(1) and spheres are never moved. The kernels are the
+per-point functions ``index_*`` in :mod:`ndpack.backends.numba_kernels`.
+
+SciPy's k-d tree answers the same questions, but it cannot grow (a rebuild per round would cost
+O(m log m) every round) and cannot run inside a Numba kernel next to the prototype's work.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Octaves of radius the index tells apart: from ``top`` down to ``top / 2**47``.
+LEVELS = 48
+
+
+class SphereIndex:
+    """The index over a growing prefix of the driver's sphere arrays.
+
+    Parameters
+    ----------
+    insert : callable
+        The compiled ``index_insert_range(start, stop, centers, radii, *self.arrays)``.
+    """
+
+    def __init__(self, insert):
+        self.insert = insert
+        self.count = 0
+        self.first = self.last = None
+        self.arrays = None
+
+    def _reset(self, centers, radii, capacity):
+        dim = centers.shape[1]
+        buckets = 1 << int(np.ceil(np.log2(max(2 * capacity, 64))))
+        # The coarsest cells are four times the largest radius seen so far; later larger spheres
+        # still go to level 0, whose largest radius every query allows for.
+        top = 4.0 * float(radii.max()) if len(radii) and radii.max() > 0 else 1.0
+        self.top = top
+        self.arrays = (
+            np.zeros(dim),                          # origin
+            top,                                    # top
+            np.full(buckets, -1, dtype=np.int64),   # heads
+            np.full(capacity, -1, dtype=np.int64),  # next
+            np.zeros(capacity, dtype=np.int64),     # level_of
+            np.full(LEVELS, -1, dtype=np.int64),    # level_head
+            np.full(capacity, -1, dtype=np.int64),  # level_next
+            np.zeros(LEVELS, dtype=np.int64),       # level_count
+            np.zeros(LEVELS),                       # level_rmax
+        )
+        self.count = 0
+
+    @property
+    def capacity(self) -> int:
+        return 0 if self.arrays is None else len(self.arrays[3])
+
+    def sync(self, centers: np.ndarray, radii: np.ndarray):
+        """Index ``centers`` (m, d) float64 and ``radii`` (m,) float64; only new rows are inserted
+        when the arrays extend the ones indexed before (checked on the first and last sphere)."""
+        count = len(radii)
+        same_prefix = (
+            self.arrays is not None and count >= self.count and centers.shape[1] == len(self.arrays[0])
+            and (self.count == 0 or (np.array_equal(centers[0], self.first)
+                                     and np.array_equal(centers[self.count - 1], self.last)))
+        )
+        if not same_prefix or count > self.capacity:
+            self._reset(centers, radii, max(64, 2 * count))
+        if count > self.count:
+            self.insert(self.count, count, centers, radii, *self.arrays)
+            self.count = count
+            self.first, self.last = centers[0].copy(), centers[count - 1].copy()
+        return self.arrays
