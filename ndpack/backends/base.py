@@ -66,7 +66,8 @@ class Backend:
         direction array may have no rows, which spares the compiled backends that work."""
         raise NotImplementedError
 
-    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None):
+    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None,
+                 starts=None):
         """Move each prototype ``p <- p + eps * (p - q)`` away from its nearest obstacle point ``q``.
 
         Parameters
@@ -81,6 +82,9 @@ class Backend:
             A lower bound of the boundary's distance at each cell's centre. Where a sphere is
             nearer than ``wall - |x - centre|``, the boundary cannot be nearest and the shape's
             distance is not evaluated: the same result, faster deep inside. None: always evaluate.
+        starts : (t, n, d) float64, optional
+            Restart points: each prototype starts from the first of its point and its starts with
+            the largest clearance.
 
         Returns
         -------
@@ -90,6 +94,14 @@ class Backend:
             Their clearances.
         """
         raise NotImplementedError
+
+    def _best_of_starts(self, shape, points, starts, centers, radii, neighbours):
+        """:meth:`converge`'s starting points, for backends that choose them apart from converging."""
+        if starts is None or len(starts) == 0:
+            return points
+        from .prototypes import best_starts
+
+        return best_starts(self, shape, np.concatenate([points[None], starts]), centers, radii, neighbours)[0]
 
     def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
         """Spheres whose surface comes within ``reach`` of each box.

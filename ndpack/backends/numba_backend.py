@@ -27,9 +27,11 @@ def distance_all(points, prm, out):
         out[i] = sd(points[i], prm)
 
 
-def converge_all(points, lower, upper, wall, prm, centers, radii, nbr, steps, out_points, out_clearance):
+def converge_all(points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, out_points,
+                 out_clearance):
     for i in prange(points.shape[0]):
-        converge_one(i, points, lower, upper, wall, prm, centers, radii, nbr, steps, out_points, out_clearance)
+        converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, out_points,
+                     out_clearance)
 
 
 def near_count(lower, upper, reach, centers, radii, counts, out):
@@ -139,11 +141,14 @@ class NumbaBackend(Backend):
         self._run(namespace["distance_all"], _f64(points), params, out)
         return out
 
-    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None):
+    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None,
+                 starts=None):
         namespace, params = self._kernels(shape)
         out_points = np.empty_like(points)
         out_clearance = np.empty(len(points))
-        self._run(namespace["converge_all"], _f64(points), _f64(cell_lower), _f64(cell_upper),
+        tries = 0 if starts is None else len(starts)
+        starts = _f64(starts) if tries else np.zeros((1, len(points), shape.dim))
+        self._run(namespace["converge_all"], _f64(points), starts, tries, _f64(cell_lower), _f64(cell_upper),
                   _f64(no_wall(len(points)) if wall is None else wall), params,
                   _f64(centers), _f64(radii), _i64(neighbours), _f64(steps), out_points, out_clearance)
         return out_points, out_clearance

@@ -33,10 +33,12 @@ def distance_all(points, prm, out):
         out[i] = sd(points[i], prm)
 
 
-def converge_all(points, lower, upper, wall, prm, centers, radii, nbr, steps, out_points, out_clearance):
+def converge_all(points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, out_points,
+                 out_clearance):
     i = cuda.grid(1)
     if i < points.shape[0]:
-        converge_one(i, points, lower, upper, wall, prm, centers, radii, nbr, steps, out_points, out_clearance)
+        converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, out_points,
+                     out_clearance)
 
 
 def near_count(lower, upper, reach, centers, radii, counts, out):
@@ -248,14 +250,17 @@ class NumbaCudaBackend(Backend):
         self._launch(namespace["distance_all"], len(points), self.cuda.to_device(_f64(points)), params, out)
         return out.copy_to_host()[: len(points)]
 
-    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None):
+    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None,
+                 starts=None):
         namespace, params = self._kernels(shape)
         d_centers, d_radii, table = self._spheres_and_table(centers, radii, neighbours)
         to = self.cuda.to_device
         out_points = self.cuda.device_array(points.shape, dtype=np.float64)
         out_clearance = self.cuda.device_array(len(points), dtype=np.float64)
         wall = no_wall(len(points)) if wall is None else wall
-        self._launch(namespace["converge_all"], len(points), to(_f64(points)), to(_f64(cell_lower)),
+        tries = 0 if starts is None else len(starts)
+        starts = _f64(starts) if tries else np.zeros((1, len(points), shape.dim))
+        self._launch(namespace["converge_all"], len(points), to(_f64(points)), to(starts), tries, to(_f64(cell_lower)),
                      to(_f64(cell_upper)), to(_f64(wall)), params, d_centers, d_radii, table, to(_f64(steps)),
                      out_points, out_clearance)
         return out_points.copy_to_host(), out_clearance.copy_to_host()

@@ -14,7 +14,8 @@ Array arguments: ``points``, ``lower``, ``upper``, ``centers`` (n, D) float64; `
 
 
 def nearest_obstacle(x, prm, centers, radii, nbr, row, floor):
-    """Clearance of ``x`` and its nearest sphere (-1 when the shape's boundary is nearest).
+    """Clearance of ``x``, its nearest sphere (-1 when the shape's boundary is nearest), and the
+    boundary's distance where it was evaluated (-inf where not).
 
     ``floor`` is a lower bound of the boundary's distance at ``x`` (from the cell's wall, see
     :func:`wall_floor`): a sphere nearer than that is nearest without evaluating the shape, which
@@ -38,11 +39,11 @@ def nearest_obstacle(x, prm, centers, radii, nbr, row, floor):
                 gap_min = gap
                 nearest = s
     if nearest >= 0 and gap_min < floor:
-        return gap_min, nearest
+        return gap_min, nearest, -math.inf
     boundary = -sd(x, prm)
     if gap_min < boundary:  # the boundary wins over an equal sphere
-        return gap_min, nearest
-    return boundary, -1
+        return gap_min, nearest, boundary
+    return boundary, -1, boundary
 
 
 def wall_floor(x, lower, upper, wall, cell):
@@ -55,13 +56,14 @@ def wall_floor(x, lower, upper, wall, cell):
     return wall[cell] - math.sqrt(length2)
 
 
-def free_space(x, g, prm, centers, radii, nbr, row, floor):
+def free_space(x, g, prm, centers, radii, nbr, row, floor, seen):
     """Clearance of ``x`` and, in ``g``, the direction away from its nearest obstacle.
 
     Away from the shape's boundary it is ``-grad sd`` by central differences of step ``H``
     (the reference uses the analytic gradient); away from a sphere, the unit vector from its centre.
     """
-    clearance, nearest = nearest_obstacle(x, prm, centers, radii, nbr, row, floor)
+    clearance, nearest, boundary = nearest_obstacle(x, prm, centers, radii, nbr, row, floor)
+    seen[0] = boundary
     if nearest < 0:
         for k in range(D):
             xk = x[k]
@@ -91,36 +93,69 @@ def clearance_one(i, points, prm, centers, radii, nbr, out, out_direction):
     g = point()
     for k in range(D):
         x[k] = points[i, k]
-    out[i] = free_space(x, g, prm, centers, radii, nbr, i, -math.inf)
+    seen = point()
+    out[i] = free_space(x, g, prm, centers, radii, nbr, i, -math.inf, seen)
     if out_direction.shape[0] > i:
         for k in range(D):
             out_direction[i, k] = g[k]
 
 
-def converge_one(i, points, lower, upper, wall, prm, centers, radii, nbr, steps, out_points, out_clearance):
-    """Converge point ``i`` in its cell (row ``i`` of every table) into the outputs."""
+def converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, out_points,
+                 out_clearance):
+    """Converge point ``i`` in its cell (row ``i`` of every table), from the best of it and
+    ``starts[:tries, i]``, into the outputs."""
     x = point()
     g = point()
     best = point()
     for k in range(D):
         x[k] = points[i, k]
+    best_start(x, g, starts, tries, i, i, lower, upper, wall, prm, centers, radii, nbr)
     out_clearance[i] = converge_from(x, g, best, i, i, lower, upper, wall, prm, centers, radii, nbr, steps)
     for k in range(D):
         out_points[i, k] = best[k]
+
+
+def best_start(x, g, starts, tries, cell, row, lower, upper, wall, prm, centers, radii, nbr):
+    """Replace ``x`` by the first of ``starts[:tries, row]`` with a larger clearance, if any
+    (``g`` is scratch): the reference's best of a prototype's point and its restarts."""
+    if tries > 0:
+        top = nearest_obstacle(x, prm, centers, radii, nbr, row, wall_floor(x, lower, upper, wall, cell))[0]
+        for t in range(tries):
+            for k in range(D):
+                g[k] = starts[t, row, k]
+            c = nearest_obstacle(g, prm, centers, radii, nbr, row, wall_floor(g, lower, upper, wall, cell))[0]
+            if c > top:
+                top = c
+                for k in range(D):
+                    x[k] = g[k]
 
 
 def converge_from(x, g, best, cell, row, lower, upper, wall, prm, centers, radii, nbr, steps):
     """``p <- p + eps |c| g`` from ``x``, clipped to cell ``cell``, with neighbour row ``row``.
 
     Leaves the best point seen in ``best`` (as the reference does) and returns its clearance;
-    ``x`` and ``g`` are scratch.
+    ``x`` and ``g`` are scratch. The boundary's distance last evaluated, at ``anchor``, bounds it
+    nearby (1-Lipschitz) better than the cell's wall: steps are small, so most evaluations deep
+    in the packing are spared.
     """
+    anchor = point()
+    seen = point()
+    anchored = -math.inf
     for k in range(D):
         best[k] = x[k]
+        anchor[k] = x[k]
     best_clearance = -math.inf
     count = steps.shape[0]
     for t in range(count + 1):
-        c = free_space(x, g, prm, centers, radii, nbr, row, wall_floor(x, lower, upper, wall, cell))
+        length2 = 0.0
+        for k in range(D):
+            length2 += (x[k] - anchor[k]) ** 2
+        floor = max(wall_floor(x, lower, upper, wall, cell), anchored - math.sqrt(length2) - 1e-3 * H)
+        c = free_space(x, g, prm, centers, radii, nbr, row, floor, seen)
+        if seen[0] > -math.inf:
+            anchored = seen[0]
+            for k in range(D):
+                anchor[k] = x[k]
         if c > best_clearance:
             best_clearance = c
             for k in range(D):
@@ -142,16 +177,7 @@ def move_one(b, ids, starts, tries, points, clearance, polished, lower, upper, w
     best = point()
     for k in range(D):
         x[k] = points[i, k]
-    if tries > 0:
-        top = nearest_obstacle(x, prm, centers, radii, nbr, b, wall_floor(x, lower, upper, wall, i))[0]
-        for t in range(tries):
-            for k in range(D):
-                g[k] = starts[t, b, k]
-            c = nearest_obstacle(g, prm, centers, radii, nbr, b, wall_floor(g, lower, upper, wall, i))[0]
-            if c > top:
-                top = c
-                for k in range(D):
-                    x[k] = g[k]
+    best_start(x, g, starts, tries, i, b, lower, upper, wall, prm, centers, radii, nbr)
     c = converge_from(x, g, best, i, b, lower, upper, wall, prm, centers, radii, nbr, steps)
     if polish == 0 or c > clearance[i]:
         clearance[i] = c

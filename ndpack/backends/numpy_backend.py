@@ -66,9 +66,11 @@ class NumpyBackend(Backend):
         centers, radii = _with_sphere_at_infinity(centers, radii)
         return self._free_space_among(shape, points, centers[neighbours], radii[neighbours])
 
-    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None):
+    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None,
+                 starts=None):
         # ``wall`` only lets the compiled backends skip distances that cannot matter; the
         # reference evaluates them all.
+        points = self._best_of_starts(shape, points, starts, centers, radii, neighbours)
         centers, radii = _with_sphere_at_infinity(centers, radii)
         neighbour_centers, neighbour_radii = centers[neighbours], radii[neighbours]
         points = points.copy()

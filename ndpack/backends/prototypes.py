@@ -197,11 +197,8 @@ class HostPrototypes(Prototypes):
         lower, upper = self.cell_lower[ids], self.cell_upper[ids]
         neighbours, self.reach[ids] = backend.near_spheres(lower, upper, self.reach[ids], centers, radii,
                                                            return_bound=True)
-        points = self.points[ids]
-        if starts is not None:
-            points, _ = best_starts(backend, shape, np.concatenate([points[None], starts]), centers, radii, neighbours)
-        points, clearance = backend.converge(shape, points, lower, upper, centers, radii, neighbours, steps,
-                                             self.wall[ids])
+        points, clearance = backend.converge(shape, self.points[ids], lower, upper, centers, radii, neighbours,
+                                             steps, self.wall[ids], starts)
         if polish:
             better = clearance > self.clearance[ids]
             self.points[ids[better]] = points[better]

@@ -155,7 +155,9 @@ class WarpBackend(Backend):
                            inputs=[self._points(module, points), params, out])
         return out.numpy().astype(np.float64)
 
-    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None):
+    def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None,
+                 starts=None):
+        points = self._best_of_starts(shape, points, starts, centers, radii, neighbours)
         module, params, h = self._module(shape)
         wall = no_wall(len(points)) if wall is None else wall
         d_centers, d_radii, table = self._spheres_and_table(module, centers, radii, neighbours)
