@@ -144,6 +144,19 @@ class Backend:
         return f"<ndpack backend {self.name!r}>"
 
 
+def tightened_reach(box_lower, box_upper, reach, centers, radii, table) -> np.ndarray:
+    """The reach :meth:`Backend.near_spheres` returns, from its table (n, k): (n,) float64.
+
+    Every sphere that tightens a box's reach is within it of the box, so it is in the table.
+    """
+    middles = 0.5 * (box_lower + box_upper)
+    half = 0.5 * np.linalg.norm(box_upper - box_lower, axis=1)
+    padded_centers = np.vstack([centers, np.full((1, centers.shape[1]), np.inf)])
+    padded_radii = np.append(radii, 0.0)
+    gaps = np.linalg.norm(middles[:, None, :] - padded_centers[table], axis=2) - padded_radii[table]
+    return np.minimum(reach, gaps.min(axis=1, initial=np.inf) + half)
+
+
 def no_wall(count: int) -> np.ndarray:
     """(count,) walls that never spare a distance evaluation (see :meth:`Backend.converge`)."""
     return np.full(count, -np.inf)

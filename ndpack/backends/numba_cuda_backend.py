@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import BackendError
-from .base import Backend, compiled_program, no_wall
+from .base import Backend, compiled_program, no_wall, tightened_reach
 from .device_spheres import DeviceSpheres
 from .numba_backend import FD_STEP, KERNELS
 
@@ -266,8 +266,9 @@ class NumbaCudaBackend(Backend):
         return out_points.copy_to_host(), out_clearance.copy_to_host()
 
     def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
-        if return_bound:  # the device store tightens its cells' reach on the device instead
-            raise NotImplementedError(f"{self.name}.near_spheres(return_bound=True)")
+        if return_bound:
+            table = self.near_spheres(box_lower, box_upper, reach, centers, radii)
+            return table, tightened_reach(box_lower, box_upper, reach, centers, radii, table)
         count = len(box_lower)
         if len(centers) == 0 or count == 0:
             return np.zeros((count, 0), dtype=np.int64)

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import BackendError
-from .base import Backend, compiled_program, no_wall
+from .base import Backend, compiled_program, no_wall, tightened_reach
 from .device_spheres import DeviceSpheres
 
 KERNELS = Path(__file__).with_name("warp_kernels.py").read_text()
@@ -172,8 +172,9 @@ class WarpBackend(Backend):
                 out_clearance.numpy().astype(np.float64))
 
     def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
-        if return_bound:  # the device store tightens its cells' reach on the device instead
-            raise NotImplementedError(f"{self.name}.near_spheres(return_bound=True)")
+        if return_bound:
+            table = self.near_spheres(box_lower, box_upper, reach, centers, radii)
+            return table, tightened_reach(box_lower, box_upper, reach, centers, radii, table)
         count = len(box_lower)
         if len(centers) == 0 or count == 0:
             return np.zeros((count, 0), dtype=np.int64)

@@ -1,0 +1,156 @@
+"""Packing at scale: the sphere index, the cells' walls, and the fast mode against the faithful one."""
+
+import numpy as np
+import pytest
+
+import ndpack as nd
+from ndpack.backends.numba_backend import INDEX_NEW_SPHERES, NumbaBackend
+from ndpack.backends.numpy_backend import NumpyBackend
+from ndpack.protosphere import disjoint_greedy, nearest_sphere
+
+REFERENCE = NumpyBackend()
+
+
+def spheres_over_octaves(rng, count, dim, size=3.0):
+    """Spheres whose radii span five orders of magnitude, as a greedy packing's do."""
+    radii = 0.4 * rng.random(count) ** 8 + 1e-6
+    return size * rng.random((count, dim)), radii
+
+
+@pytest.mark.parametrize("dim", [2, 3, 5])
+def test_index_finds_the_spheres_the_reference_finds(dim):
+    rng = np.random.default_rng(dim)
+    centers, radii = spheres_over_octaves(rng, 2000, dim)
+    lower = 3.0 * rng.random((300, dim))
+    upper = lower + rng.random((300, 1)) * np.array([0.001, 0.03, 0.3])[rng.integers(0, 3, 300)][:, None]
+    reach = rng.random(300) * 0.5
+    backend = NumbaBackend()
+    for count in (1, 700, 2000):  # grows: the index adds only the new spheres
+        expected, expected_bound = REFERENCE.near_spheres(lower, upper, reach, centers[:count], radii[:count],
+                                                          return_bound=True)
+        got, bound = backend.near_spheres(lower, upper, reach, centers[:count], radii[:count], return_bound=True)
+        np.testing.assert_array_equal(got, expected)
+        np.testing.assert_allclose(bound, expected_bound, rtol=0, atol=1e-12)
+    # Other spheres (not an extension of the indexed ones) start a fresh index.
+    moved = centers[:500] + 0.01
+    np.testing.assert_array_equal(backend.near_spheres(lower, upper, reach, moved, radii[:500]),
+                                  REFERENCE.near_spheres(lower, upper, reach, moved, radii[:500]))
+
+
+@pytest.mark.parametrize("dim", [2, 3, 6])
+def test_touched_through_the_index_matches_the_reference(dim):
+    rng = np.random.default_rng(10 + dim)
+    points = rng.random((4000, dim))
+    clearance = rng.random(4000) * 0.1 * dim - 0.02  # some prototypes already inside a sphere
+    new_centers = rng.random((4 * INDEX_NEW_SPHERES, dim))
+    new_radii = rng.random(4 * INDEX_NEW_SPHERES) * 0.05
+    expected = REFERENCE.touched(points, clearance, new_centers, new_radii)
+    assert 0 < expected.sum() < len(points)
+    np.testing.assert_array_equal(NumbaBackend().touched(points, clearance, new_centers, new_radii), expected)
+
+
+@pytest.mark.parametrize("shape", [nd.Ball(np.zeros(3), 1.0), nd.Box(-np.ones(2), np.ones(2)) - nd.Ball(np.zeros(2), 0.3)])
+def test_walls_spare_evaluations_without_changing_results(shape):
+    """A wall lets the kernel skip the shape where a sphere is surely nearer: same numbers."""
+    rng = np.random.default_rng(4)
+    dim = shape.dim
+    lower = shape.bounds[0] + (shape.bounds[1] - shape.bounds[0]) * rng.random((500, dim)) * 0.9
+    upper = lower + 0.1
+    points = lower + 0.1 * rng.random((500, dim))
+    centers = shape.bounds[0] + (shape.bounds[1] - shape.bounds[0]) * rng.random((60, dim))
+    radii = np.full(60, 0.05)
+    wall = -shape._distance(0.5 * (lower + upper)) - 1e-9
+    neighbours = REFERENCE.near_spheres(lower, upper, np.full(500, 10.0), centers, radii)
+    steps = nd.protosphere.cooling_schedule(30)
+    starts = lower + 0.1 * rng.random((3, 500, dim))
+    backend = NumbaBackend()
+    plain = backend.converge(shape, points, lower, upper, centers, radii, neighbours, steps, starts=starts)
+    walled = backend.converge(shape, points, lower, upper, centers, radii, neighbours, steps, wall, starts)
+    np.testing.assert_array_equal(walled[0], plain[0])
+    np.testing.assert_array_equal(walled[1], plain[1])
+    reference = REFERENCE.converge(shape, points, lower, upper, centers, radii, neighbours, steps, starts=starts)
+    np.testing.assert_allclose(walled[1], reference[1], atol=1e-8)
+
+
+def test_greedy_conflict_check_and_nearest_sphere_match_brute_force():
+    rng = np.random.default_rng(5)
+    centers = rng.random((600, 3))
+    radii = np.sort(rng.random(600) * 0.05)[::-1]
+    kept = disjoint_greedy(centers, radii, 1e-9)
+    brute = []
+    for i in range(len(radii)):
+        if all(np.linalg.norm(centers[i] - centers[j]) >= radii[i] + radii[j] + 1e-9 for j in brute):
+            brute.append(i)
+    np.testing.assert_array_equal(kept, brute)
+    points = rng.random((300, 3))
+    gaps = np.linalg.norm(points[:, None] - centers, axis=2) - radii
+    np.testing.assert_array_equal(nearest_sphere(points, centers, radii), np.argmin(gaps, axis=1))
+
+
+def fill_at(packing, count):
+    return nd.ball_volume(packing.dim, packing.radii[:count]).sum() / packing.volume
+
+
+@pytest.mark.parametrize("dim, count", [(2, 3000), (3, 3000)])
+def test_fast_mode_fills_like_the_faithful_mode(dim, count):
+    shape = nd.Box(np.zeros(dim), np.ones(dim))
+    faithful = nd.pack(shape, count, backend="numba", grid=24 if dim == 3 else 100)
+    fast = nd.pack(shape, count, backend="numba", mode="fast", grid=24 if dim == 3 else 100)
+    assert len(fast) == count and fast.verify().ok
+    assert fast.params["mode"] == "fast"
+    for at in (count // 10, count // 2, count):
+        assert abs(fill_at(fast, at) / fill_at(faithful, at) - 1) < 0.01
+    # Far fewer rounds: many spheres each.
+    assert len(fast.stats.time) < count / 20
+
+
+@pytest.mark.parametrize("dim", [2, 3, 4])
+def test_fast_mode_finds_the_exact_cube_radii(dim):
+    packing = nd.pack(nd.Box(np.zeros(dim), np.ones(dim)), n=1 + 2**dim, mode="fast", backend="numba")
+    assert abs(packing.radii[0] - 0.5) < 1e-4
+    radius = 0.5 * (np.sqrt(dim) - 1) / (np.sqrt(dim) + 1)
+    assert np.abs(packing.radii[1:] / radius - 1).max() < 1e-4
+    assert len(np.unique(np.round(packing.centers[1:]), axis=0)) == 2**dim
+
+
+def test_fast_mode_splits_cells_and_the_cells_still_tile_the_grid():
+    import ndpack.protosphere as protosphere
+
+    shape = nd.Box(np.zeros(2), np.ones(2))
+    states = []
+    original = protosphere._ProtoSphere.__init__
+
+    def keep(self, *args, **kwargs):
+        original(self, *args, **kwargs)
+        states.append(self)
+
+    protosphere._ProtoSphere.__init__ = keep
+    try:
+        packing = nd.pack(shape, 4000, mode="fast", backend="numba", grid=16)
+    finally:
+        protosphere._ProtoSphere.__init__ = original
+    store = states[0].prototypes
+    assert len(store) > 16 * 16  # cells split where the gaps became small
+    sizes = store.cell_upper - store.cell_lower
+    assert np.isclose(np.prod(sizes, axis=1).sum(), 1.0)  # halves tile the grid, no cell lost
+    points, _ = store.all()
+    assert np.all((points >= store.cell_lower) & (points <= store.cell_upper))
+    assert packing.verify().ok
+
+
+def test_fast_mode_on_a_mesh_and_the_reference_backend_agree():
+    mesh = nd.TriangleMesh.load(__import__("pathlib").Path(__file__).parent / "data/meshes/fandisk.ply")
+    fast = nd.pack(mesh, 400, mode="fast", backend="numba", grid=12)
+    reference = nd.pack(mesh, 400, mode="fast", backend="numpy", grid=12)
+    assert fast.verify().ok and reference.verify().ok
+    # The compiled gradient is a central difference, the reference's comes from the nearest
+    # point: at the model's creases prototypes stop in slightly different places (faithful
+    # mode too: radii differ by up to 0.2% here), and a round's choice among near-equal
+    # candidates can follow. The largest sphere and the fill agree.
+    assert abs(fast.radii[0] / reference.radii[0] - 1) < 1e-4
+    assert abs(fast.fill / reference.fill - 1) < 0.01
+
+
+def test_mode_is_checked():
+    with pytest.raises(nd.ParameterError, match="mode must be"):
+        nd.pack(nd.Ball(np.zeros(2), 1.0), 3, mode="quick")
