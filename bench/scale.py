@@ -7,6 +7,8 @@ Cases (each a list of runs; every run is one ``nd.pack`` after a 3-sphere warm-u
 - ``cube`` / ``square``: fast mode to the largest count, fill against count from the rounds'
   statistics, and the fitted exponent ``a`` of the uncovered fraction ``1 - fill ~ C N^-a``.
 - ``nd``: a 4-, 5- and 6-dimensional shape, fast mode to ``--nd-count``.
+- ``quality``: unit cube and square, fast and faithful mode to ``--quality-count``: fill at
+  equal counts.
 - ``voxel``: the method a user would otherwise write with SciPy (Euclidean distance transform of
   a ``--voxels``^3 grid, take the maximum, insert, update the distances near the new sphere)
   against the faithful mode at equal counts: time, fill, radii against the faithful mode's.
@@ -20,6 +22,7 @@ Fill at a count is the spheres' volume over the shape's. Compile time is the war
 from __future__ import annotations
 
 import argparse
+import resource
 import sys
 import time
 from pathlib import Path
@@ -57,8 +60,11 @@ def timed_pack(shape, count, backend, **options):
         reached = np.flatnonzero(packing.stats.count >= c)
         if len(reached):
             times[int(c)] = float(packing.stats.time[reached[0]])
+    # The process's peak resident memory so far (run a case alone to read it as that case's).
+    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return packing, dict(compile_s=compile_s, seconds=seconds, spheres=len(packing), rounds=len(packing.stats.time),
-                         stop=packing.stop_reason, time_to=times, verified=bool(packing.verify().ok))
+                         stop=packing.stop_reason, time_to=times, verified=bool(packing.verify().ok),
+                         peak_host_mb=peak_mb)
 
 
 def exponent(packing, low):
@@ -100,6 +106,23 @@ def unit_box(args, backend, dim):
                exponent=exponent(packing, count / 100), exponent_theory=theory)
     print(run, flush=True)
     return [run]
+
+
+def quality(args, backend):
+    """Fast against faithful mode in the unit square and cube, at the same counts."""
+    runs = []
+    marks = [c for c in (1000, 5000, 10_000, 20_000, 50_000, 100_000) if c <= args.quality_count]
+    for dim in (3, 2):
+        shape = nd.Box(np.zeros(dim), np.ones(dim))
+        packings = {}
+        for mode in ("faithful", "fast"):
+            packings[mode], run = timed_pack(shape, args.quality_count, backend, mode=mode)
+            run.update(case=f"unit {('square', 'cube')[dim - 2]}", mode=mode, backend=backend,
+                       fill=fill_at(packings[mode], marks))
+            runs.append(run)
+        runs[-1]["fast_fill_ratio"] = {c: runs[-1]["fill"][c] / runs[-2]["fill"][c] for c in marks}
+        print(runs[-2], runs[-1], sep="\n", flush=True)
+    return runs
 
 
 def high_dimensions(args, backend):
@@ -170,13 +193,14 @@ def voxel(args, backend):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--cases", nargs="+", default=["armadillo", "cube", "square", "nd", "voxel"])
+    parser.add_argument("--cases", nargs="+", default=["armadillo", "cube", "square", "quality", "nd", "voxel"])
     parser.add_argument("--backends", nargs="+", default=["numba"])
     parser.add_argument("--mesh", default=str(MESH))
     parser.add_argument("--counts", nargs="+", type=int, default=[10_000, 100_000])
     parser.add_argument("--faithful-count", type=int, default=10_000)
     parser.add_argument("--box-count", type=int, default=100_000)
     parser.add_argument("--nd-count", type=int, default=20_000)
+    parser.add_argument("--quality-count", type=int, default=20_000)
     parser.add_argument("--voxels", type=int, default=256)
     parser.add_argument("--voxel-count", type=int, default=2000)
     parser.add_argument("--time-budget", type=float, default=None, help="seconds a packing may take (then it stops)")
@@ -191,6 +215,8 @@ def main():
                 results["runs"] += armadillo(args, backend)
             elif case in ("cube", "square"):
                 results["runs"] += unit_box(args, backend, 3 if case == "cube" else 2)
+            elif case == "quality":
+                results["runs"] += quality(args, backend)
             elif case == "nd":
                 results["runs"] += high_dimensions(args, backend)
             elif case == "voxel":

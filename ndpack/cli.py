@@ -13,6 +13,7 @@ EXAMPLES = """examples:
   ndpack pack box:dim=4 -n 500 -o box4.npz
   ndpack pack ball --dim 6 -n 200
   ndpack pack annulus -n 2000 --batch 8 -o ring.csv
+  ndpack pack box:dim=3 -n 100000 --mode fast -o cube.npz
 built-in shapes: {shapes}
 """
 
@@ -37,7 +38,10 @@ def _parser() -> argparse.ArgumentParser:
     pack.add_argument("--time", type=float, dest="time_budget", help="stop after this many seconds")
     pack.add_argument("--grid", type=int, help="grid cells along the longest side")
     pack.add_argument("--iterations", type=int, default=50, help="prototype steps (default 50)")
-    pack.add_argument("--batch", type=int, default=1, help="spheres per round (default 1)")
+    pack.add_argument("--batch", type=int, default=1, help="spheres per round in the faithful mode (default 1)")
+    pack.add_argument("--mode", choices=("faithful", "fast"), default="faithful",
+                      help="faithful: the paper's rounds (default); fast: many spheres a round and a "
+                      "grid refined where gaps are small, for large counts")
     pack.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     pack.add_argument("--backend", help="numpy, numba, numba-cuda or warp (default: $NDPACK_BACKEND or the fastest)")
     pack.add_argument("--device", help="cpu or cuda:N, for warp and numba-cuda")
@@ -63,6 +67,7 @@ def _pack(args) -> int:
         grid=args.grid,
         iterations=args.iterations,
         batch=args.batch,
+        mode=args.mode,
         seed=args.seed,
         backend=args.backend,
         device=args.device,

@@ -354,8 +354,8 @@ def nearest_sphere(points, centers, radii):
     """Per point (n, d), the sphere (``centers`` (k, d), ``radii`` (k,)) with the smallest gap
     ``|p - c| - r``, the first of equals: (n,) int64.
 
-    Many spheres (a fast-mode round): among each point's nearest centres, enough of them that
-    no farther sphere can be nearer (radii differ by at most the largest).
+    Many spheres (a fast-mode round): among each point's 16 nearest centres, and where a farther
+    sphere could still be nearer (its radius larger), among all that could.
     """
     if len(radii) <= NEAREST_BY_SEARCH:
         offsets = points[:, None, :] - centers  # (n, k, d)
@@ -363,14 +363,20 @@ def nearest_sphere(points, centers, radii):
     from scipy.spatial import cKDTree
 
     tree = cKDTree(centers)
-    distance, _ = tree.query(points, k=1)
-    best = np.empty(len(points), dtype=np.int64)
-    # Any sphere nearer by gap has its centre within (nearest centre's distance + largest radius).
-    candidates = tree.query_ball_point(points, distance + float(radii.max()))
-    for i, near in enumerate(candidates):
-        near = np.sort(np.asarray(near, dtype=np.int64))
-        gaps = np.linalg.norm(points[i] - centers[near], axis=1) - radii[near]
-        best[i] = near[np.argmin(gaps)]
+    distance, near = tree.query(points, k=NEAREST_BY_SEARCH // 4)
+    gaps = distance - radii[near]
+    # Smallest gap, the lowest id among equals (as argmin over all spheres in id order).
+    best_gap = gaps.min(axis=1)
+    best = np.where(gaps == best_gap[:, None], near, len(radii)).min(axis=1)
+    # A sphere farther than the k-th nearest centre has a gap of at least that less the largest
+    # radius: where that could beat the best found, search the ball that holds every rival.
+    largest = float(radii.max())
+    unsure = np.flatnonzero(distance[:, -1] - largest <= best_gap)
+    reach = best_gap[unsure] + largest
+    reach += 1e-9 * (np.abs(reach) + largest)  # the tree's distances round differently
+    for i, rivals in zip(unsure, tree.query_ball_point(points[unsure], reach)):
+        rivals = np.unique(np.append(np.asarray(rivals, dtype=np.int64), best[i]))
+        best[i] = rivals[np.argmin(np.linalg.norm(points[i] - centers[rivals], axis=1) - radii[rivals])]
     return best
 
 
@@ -480,6 +486,7 @@ def pack(
         restarts=int(restarts), seed=seed, backend=backend.name, device=str(getattr(backend, "device", "cpu")),
         eps_start=EPS_START, eps_end=EPS_END, cooling_power=COOLING_POWER,
         polish_iterations=POLISH_ITERATIONS, polish_window=POLISH_WINDOW, safety_margin=SAFETY_MARGIN,
+        fast_window=FAST_WINDOW, split_ratio=SPLIT_RATIO,
     )
     started = time.perf_counter()
     state = _ProtoSphere(shape, backend, counts, int(iterations), int(restarts), np.random.default_rng(seed))

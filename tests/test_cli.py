@@ -38,3 +38,15 @@ def test_impossible_parameters_and_backend():
 def test_help_has_examples():
     result = run("pack", "--help")
     assert result.returncode == 0 and "examples:" in result.stdout and "box:dim=4" in result.stdout
+
+
+def test_fast_mode_from_the_command_line(tmp_path):
+    out = tmp_path / "square.npz"
+    result = run("pack", "box:dim=2", "-n", "400", "--mode", "fast", "--backend", "numpy", "--grid", "20",
+                 "-o", str(out), "-q")
+    assert result.returncode == 0, result.stderr
+    packing = nd.Packing.load(out)
+    assert len(packing) == 400 and packing.params["mode"] == "fast"
+    assert packing.verify(nd.Box([0, 0], [1, 1])).ok
+    result = run("pack", "box", "--mode", "quick")
+    assert result.returncode == 2 and "invalid choice" in result.stderr

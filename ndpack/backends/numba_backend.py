@@ -2,6 +2,8 @@
 
 Each shape compiles once per structure and dimension (see :mod:`ndpack.kernels`); the per-point
 work is shared with the CUDA backend (:mod:`ndpack.backends.numba_kernels`). float64 throughout.
+The spheres near a prototype's cell, and the prototypes a round's spheres touch, are found through
+a sphere index (:mod:`ndpack.backends.sphere_index`), so neither costs a pass over every sphere.
 """
 
 from __future__ import annotations
@@ -32,16 +34,6 @@ def converge_all(points, starts, tries, lower, upper, wall, prm, centers, radii,
     for i in prange(points.shape[0]):
         converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, out_points,
                      out_clearance)
-
-
-def near_count(lower, upper, reach, centers, radii, counts, out):
-    for b in prange(lower.shape[0]):
-        counts[b] = near_one(b, lower, upper, reach, centers, radii, out, 0)
-
-
-def near_fill(lower, upper, reach, centers, radii, out):
-    for b in prange(lower.shape[0]):
-        near_one(b, lower, upper, reach, centers, radii, out, out.shape[1])
 
 
 def touched_all(points, clearance, centers, radii, out):
@@ -75,8 +67,7 @@ def index_fill(lower, upper, bound, centers, radii, origin, top, heads, nxt, lev
 FD_STEP = 1e-6
 #: Above this many new spheres, :meth:`NumbaBackend.touched` indexes them instead of testing all.
 INDEX_NEW_SPHERES = 32
-ENTRY_NAMES = ("distance_all", "clearance_all", "converge_all", "near_count", "near_fill", "touched_all", "index_bound",
-               "index_fill")
+ENTRY_NAMES = ("distance_all", "clearance_all", "converge_all", "touched_all", "index_bound", "index_fill")
 
 
 def _jit(namespace, names):

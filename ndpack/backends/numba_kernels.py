@@ -194,22 +194,32 @@ def near_one(b, lower, upper, reach, centers, radii, out, width):
     half = math.sqrt(half2)
     bound = reach[b]
     for s in range(radii.shape[0]):  # a tighter reach from the box centre's clearance
-        length2 = 0.0
-        for k in range(D):
-            t = 0.5 * (lower[b, k] + upper[b, k]) - centers[s, k]
-            length2 += t * t
-        bound = min(bound, math.sqrt(length2) - radii[s] + half)
+        bound = min(bound, centre_gap(b, s, lower, upper, centers, radii) + half)
     found = 0
     for s in range(radii.shape[0]):
-        outside2 = 0.0
-        for k in range(D):
-            t = max(lower[b, k] - centers[s, k], centers[s, k] - upper[b, k], 0.0)
-            outside2 += t * t
-        if math.sqrt(outside2) - radii[s] <= bound:
+        if box_gap(b, s, lower, upper, centers, radii) <= bound:
             if found < width:
                 out[b, found] = s
             found += 1
     return found
+
+
+def centre_gap(b, s, lower, upper, centers, radii):
+    """Gap between sphere ``s`` and the centre of box ``b``."""
+    length2 = 0.0
+    for k in range(D):
+        t = 0.5 * (lower[b, k] + upper[b, k]) - centers[s, k]
+        length2 += t * t
+    return math.sqrt(length2) - radii[s]
+
+
+def box_gap(b, s, lower, upper, centers, radii):
+    """Gap between sphere ``s`` and box ``b`` (negative when they overlap)."""
+    outside2 = 0.0
+    for k in range(D):
+        t = max(lower[b, k] - centers[s, k], centers[s, k] - upper[b, k], 0.0)
+        outside2 += t * t
+    return math.sqrt(outside2) - radii[s]
 
 
 def touched_one(i, points, clearance, centers, radii, out):
@@ -332,19 +342,10 @@ def index_near(b, lower, upper, bound, counting, centers, radii, origin, top, he
                         break
             if mine:
                 if counting == 0:
-                    length2 = 0.0
-                    for k in range(D):
-                        t = 0.5 * (lower[b, k] + upper[b, k]) - centers[s, k]
-                        length2 += t * t
-                    bound = min(bound, math.sqrt(length2) - radii[s] + half)
-                else:
-                    outside2 = 0.0
-                    for k in range(D):
-                        t = max(lower[b, k] - centers[s, k], centers[s, k] - upper[b, k], 0.0)
-                        outside2 += t * t
-                    if math.sqrt(outside2) - radii[s] <= bound:
-                        if found < width:
-                            out[b, found] = s
-                        found += 1
+                    bound = min(bound, centre_gap(b, s, lower, upper, centers, radii) + half)
+                elif box_gap(b, s, lower, upper, centers, radii) <= bound:
+                    if found < width:
+                        out[b, found] = s
+                    found += 1
             s = level_next[s] if listed else nxt[s]
     return bound, found
