@@ -12,7 +12,7 @@ clearance
     Distance from a point to the nearest obstacle, i.e. the shape's boundary or an inserted
     sphere; positive in free space. A sphere of that radius around the point is free.
 neighbours
-    ``(n, k)`` int64 indices of the spheres that can be nearest to each prototype, padded with
+    ``(n, k)`` int64 indices of the spheres that can be nearest to each prototype, padded at the end with
     ``len(centers)``, an index the backend maps to a sphere at infinity.
 """
 

@@ -27,17 +27,18 @@ def nearest_obstacle(x, prm, centers, radii, nbr, row, floor):
     count = radii.shape[0]
     for j in range(nbr.shape[1]):
         s = nbr[row, j]
-        if s < count:
-            length2 = 0.0
-            for k in range(D):
-                t = x[k] - centers[s, k]
-                length2 += t * t
-            gap = math.sqrt(length2) - radii[s]
-            # Equal gaps: the lower sphere id wins, whatever the table's order (as the
-            # reference's argmin over ascending ids).
-            if gap < gap_min or (gap == gap_min and nearest > s):
-                gap_min = gap
-                nearest = s
+        if s >= count:  # the padding, which always follows a row's spheres
+            break
+        length2 = 0.0
+        for k in range(D):
+            t = x[k] - centers[s, k]
+            length2 += t * t
+        gap = math.sqrt(length2) - radii[s]
+        # Equal gaps: the lower sphere id wins, whatever the table's order (as the
+        # reference's argmin over ascending ids).
+        if gap < gap_min or (gap == gap_min and nearest > s):
+            gap_min = gap
+            nearest = s
     if nearest >= 0 and gap_min < floor:
         return gap_min, nearest, -math.inf
     boundary = -sd(x, prm)

@@ -22,11 +22,12 @@ def nearest_obstacle(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=Ve
     count = radii.shape[0]
     for j in range(nbr.shape[1]):
         s = nbr[row, j]
-        if s < count:
-            gap = wp.length(x - centers[s]) - radii[s]
-            if gap < gap_min or (gap == gap_min and nearest > s):
-                gap_min = gap
-                nearest = s
+        if s >= count:  # the padding, which always follows a row's spheres
+            break
+        gap = wp.length(x - centers[s]) - radii[s]
+        if gap < gap_min or (gap == gap_min and nearest > s):
+            gap_min = gap
+            nearest = s
     if nearest >= 0 and gap_min < floor:
         return gap_min, nearest
     boundary = -sd(x, prm)
