@@ -166,3 +166,16 @@ def test_fast_mode_on_the_device_store_matches_the_host_store():
     # Equal on a CPU to the last bits; a GPU's fused multiply-adds part them after a few spheres.
     np.testing.assert_allclose(device.radii[:5], host.radii[:5], rtol=1e-6)
     assert abs(device.fill / host.fill - 1) < 0.005
+
+
+def test_device_neighbour_tables_with_few_threads_a_launch(monkeypatch):
+    """Many spheres times many rows exceed 32-bit thread numbers: chunks grow longer instead."""
+    pytest.importorskip("warp")
+    from ndpack.backends.prototypes import DevicePrototypes
+
+    shape = nd.Box(np.zeros(2), np.ones(2))
+    host = nd.pack(shape, 200, backend="numba", mode="fast", grid=16)
+    monkeypatch.setattr(DevicePrototypes, "MAX_THREADS", 50)
+    device = nd.pack(shape, 200, backend="warp", mode="fast", grid=16)
+    np.testing.assert_allclose(device.radii[:5], host.radii[:5], rtol=1e-6)
+    assert device.verify().ok and abs(device.fill / host.fill - 1) < 0.005

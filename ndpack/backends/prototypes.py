@@ -234,6 +234,8 @@ class DevicePrototypes(Prototypes):
     FIRST_WIDTH = 8
     #: Spheres one thread checks against one prototype's cell when building neighbour tables.
     NEAR_CHUNK = 32
+    #: Most threads one launch may number.
+    MAX_THREADS = 2**31 - 1
     #: Answer rows copied back with the counter, at least; more after larger answers.
     FIRST_PREFIX = 64
 
@@ -335,7 +337,9 @@ class DevicePrototypes(Prototypes):
         """
         device = self.device
         spheres = d_radii.shape[0]
-        chunks = max(1, -(-spheres // self.NEAR_CHUNK))
+        # Threads are numbered in 32 bits (Warp's wp.tid()): with many spheres and many rows,
+        # fewer and longer chunks.
+        chunks = max(1, min(-(-spheres // self.NEAR_CHUNK), self.MAX_THREADS // max(count, 1)))
         bound = device.empty(count, "float")
         device.fill(bound, np.inf)
         device.launch("near_bound_ids", count * chunks, d_ids, self.d_lower, self.d_upper, self.d_reach,
