@@ -4,6 +4,7 @@ Cases (each a list of runs; every run is one ``nd.pack`` after a 3-sphere warm-u
 
 - ``armadillo``: the shared armadillo mesh (``--mesh``), fast mode to each of ``--counts``;
   the faithful mode (``batch=1``) to ``--faithful-count`` for the quality reference.
+- ``armadillo-subdivided``: the same, each triangle split in four (about 400,000).
 - ``cube`` / ``square``: fast mode to the largest count, fill against count from the rounds'
   statistics, and the fitted exponent ``a`` of the uncovered fraction ``1 - fill ~ C N^-a``.
 - ``nd``: a 4-, 5- and 6-dimensional shape, fast mode to ``--nd-count``.
@@ -79,17 +80,23 @@ def exponent(packing, low):
     return float(-np.polyfit(np.log(grid), np.log(uncovered), 1)[0])
 
 
-def armadillo(args, backend):
-    mesh = nd.TriangleMesh.load(args.mesh)
+def armadillo(args, backend, subdivided=False):
+    if subdivided:  # every triangle in four: about 400,000
+        import trimesh
+
+        mesh = nd.TriangleMesh.from_trimesh(trimesh.load(args.mesh, force="mesh").subdivide())
+    else:
+        mesh = nd.TriangleMesh.load(args.mesh)
+    label = f"armadillo, {mesh.n_triangles:,} triangles"
     runs = []
     packing, run = timed_pack(mesh, max(args.counts), backend, mode="fast")
-    run.update(case="armadillo", mode="fast", backend=backend, fill=fill_at(packing, args.counts))
+    run.update(case=label, mode="fast", backend=backend, fill=fill_at(packing, args.counts))
     runs.append(run)
     print(run, flush=True)
     if args.faithful_count:
         reference, run = timed_pack(mesh, args.faithful_count, backend, mode="faithful")
         counts = [c for c in args.counts if c <= args.faithful_count] + [args.faithful_count]
-        run.update(case="armadillo", mode="faithful", backend=backend, fill=fill_at(reference, counts))
+        run.update(case=label, mode="faithful", backend=backend, fill=fill_at(reference, counts))
         run["fast_fill_ratio"] = {c: fill_at(packing, [c])[c] / fill_at(reference, [c])[c] for c in counts}
         runs.append(run)
         print(run, flush=True)
@@ -213,6 +220,8 @@ def main():
         for case in args.cases:
             if case == "armadillo":
                 results["runs"] += armadillo(args, backend)
+            elif case == "armadillo-subdivided":
+                results["runs"] += armadillo(args, backend, subdivided=True)
             elif case in ("cube", "square"):
                 results["runs"] += unit_box(args, backend, 3 if case == "cube" else 2)
             elif case == "quality":

@@ -477,6 +477,11 @@ def pack(
     _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts)
     if mode not in ("faithful", "fast"):
         raise ParameterError(f"mode must be 'faithful' or 'fast', got {mode!r}")
+    if mode == "fast" and batch != 1:
+        raise ParameterError(
+            f"batch={batch!r} applies to the faithful mode only: the fast mode takes every candidate "
+            "within 10% of the largest a round; drop batch or use mode='faithful'"
+        )
     check_packable(shape)
     backend = get_backend(backend, device=device, shape=shape)
     counts = grid_counts(shape.bounds, grid)

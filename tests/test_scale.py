@@ -154,6 +154,8 @@ def test_fast_mode_on_a_mesh_and_the_reference_backend_agree():
 def test_mode_is_checked():
     with pytest.raises(nd.ParameterError, match="mode must be"):
         nd.pack(nd.Ball(np.zeros(2), 1.0), 3, mode="quick")
+    with pytest.raises(nd.ParameterError, match="faithful mode only"):
+        nd.pack(nd.Ball(np.zeros(2), 1.0), 3, mode="fast", batch=8)
 
 
 def test_fast_mode_on_the_device_store_matches_the_host_store():
