@@ -145,6 +145,7 @@ class _ProtoSphere:
         # A float32 backend's clearances are good to about 1e-7 of the scale: it asks for more.
         self.margin = max(SAFETY_MARGIN, getattr(backend, "margin", SAFETY_MARGIN)) * shape.scale
         self.count = 0
+        self._longest = self._bound = None  # the fast mode's refinement bookkeeping, per cell
         self.centers = np.empty((64, self.dim))
         self.radii = np.empty(64)
         self.rounds = np.empty(64, dtype=np.int64)
@@ -295,22 +296,40 @@ class _ProtoSphere:
     def refine(self, top, window, ratio=SPLIT_RATIO):
         """Fast mode: split in two, across their longest side, the cells longer than ``ratio``
         times ``top`` (the largest clearance) whose clearance bound reaches the candidates'
-        window; the new halves' prototypes converge. Repeats on the halves; how many split."""
+        window; the new halves' prototypes converge. Repeats on the halves; how many split.
+
+        Work per round follows the cells that may split, not all cells: each cell's longest side
+        and an upper bound of its clearance are kept on the host. The bound stays valid as
+        spheres arrive (clearances only shrink), so a cell is looked at again only once the
+        window has come down to it.
+        """
         store = self.prototypes
+        if self._longest is None or len(self._longest) != len(store):
+            self._longest = (store.cell_upper - store.cell_lower).max(axis=1)
+            self._bound = store.reach.copy()
         total = 0
         for _ in range(4 * self.dim):
-            points, clearance = store.all()
-            sides = store.cell_upper - store.cell_lower
-            longest = sides.max(axis=1)
-            # Clearance is 1-Lipschitz: nowhere in the cell above the prototype's plus the way
-            # to the farthest corner (a bound tighter than the stored reach for cells not moved).
-            farthest = np.maximum(points - store.cell_lower, store.cell_upper - points)
-            bound = np.minimum(store.reach, clearance + np.linalg.norm(farthest, axis=1))
-            split = (longest > ratio * top) & (bound >= (1 - window) * top) & (longest > 1e3 * self.margin)
-            ids = np.flatnonzero(split)[: max(0, MAX_PROTOTYPES - len(store))]
+            low = (1 - window) * top
+            ids = np.flatnonzero((self._longest > max(ratio * top, 1e3 * self.margin)) & (self._bound >= low))
             if len(ids) == 0:
                 break
-            self._split(ids, points[ids], sides[ids])
+            points, clearance = store.gather(ids)
+            lower, upper = store.cell_lower[ids], store.cell_upper[ids]
+            # Clearance is 1-Lipschitz: nowhere in the cell above the prototype's plus the way
+            # to the farthest corner (tighter than the stored reach for cells not moved lately).
+            farthest = np.maximum(points - lower, upper - points)
+            bound = np.minimum(store.reach[ids], clearance + np.linalg.norm(farthest, axis=1))
+            self._bound[ids] = np.minimum(self._bound[ids], bound)
+            keep = bound >= low
+            ids = ids[keep][: max(0, MAX_PROTOTYPES - len(store))]
+            if len(ids) == 0:
+                break
+            new = self._split(ids, points[keep][: len(ids)], (upper - lower)[keep][: len(ids)])
+            changed = np.concatenate([ids, new])
+            self._longest = np.concatenate([self._longest, np.empty(len(new))])
+            self._bound = np.concatenate([self._bound, np.empty(len(new))])
+            self._longest[changed] = (store.cell_upper[changed] - store.cell_lower[changed]).max(axis=1)
+            self._bound[changed] = store.reach[changed]
             total += len(ids)
         return total
 
@@ -336,6 +355,7 @@ class _ProtoSphere:
         new = store.split(ids, new_lower, new_upper, reach, wall, centres[len(ids):], np.full(len(ids), -np.inf))
         for start in range(0, len(new), 8 * REVIVE_CHUNK):  # bounded memory for the random starts
             self.reconverge(new[start : start + 8 * REVIVE_CHUNK])
+        return new
 
     def insert(self, centers, radii, round_index):
         needed = self.count + len(radii)
