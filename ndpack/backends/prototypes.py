@@ -124,14 +124,11 @@ class Prototypes:
         """Every point (n, d) and clearance (n,) on the host: for results, not for rounds."""
         return self.gather(np.arange(len(self)))
 
-    def clearances(self):
-        """Every clearance (n,) on the host (what adaptive refinement decides by)."""
-        return self.all()[1]
-
     def split(self, ids, lower, upper, reach, wall, points, clearance):
-        """Shrink cells ``ids`` to ``lower``, ``upper`` (k, d) (their prototypes stay inside) and
-        add prototypes for the rest of each cell: cells ``lower[k:]``... as the other arguments,
-        (k + j, ...) rows in all, with starting ``points`` (j, d) and ``clearance`` (j,) for the new ones.
+        """Cells cut in two: cells ``ids`` (k,) shrink to the first k rows of ``lower``, ``upper``
+        (k + j, d), ``reach`` and ``wall`` (k + j,), keeping their prototypes (which lie inside),
+        and j new prototypes get the remaining rows' cells, starting at ``points`` (j, d) with
+        ``clearance`` (j,).
 
         Returns the new prototypes' ids (j,) int64.
         """
@@ -177,9 +174,6 @@ class HostPrototypes(Prototypes):
 
     def gather(self, ids):
         return self.points[ids], self.clearance[ids]
-
-    def clearances(self):
-        return self.clearance
 
     def split(self, ids, lower, upper, reach, wall, points, clearance):
         new = super().split(ids, lower, upper, reach, wall, points, clearance)
