@@ -66,8 +66,9 @@ FAST_WINDOW = 0.1
 SPLIT_RATIO = 4.0
 #: Fast mode: at most this many candidates a round (bounds the host's conflict check).
 MAX_CANDIDATES = 1 << 16
-#: More new spheres than this: :func:`nearest_sphere` searches a k-d tree instead of testing all.
-NEAREST_BY_SEARCH = 64
+#: More new spheres than this: :func:`nearest_sphere` searches a k-d tree (among each point's
+#: ``NEAREST_CANDIDATES`` nearest centres first) instead of testing all.
+NEAREST_BY_SEARCH, NEAREST_CANDIDATES = 64, 16
 #: The cells' walls (lower bounds of the boundary's distance, which let deep prototypes skip
 #: the shape's distance) are lowered by this many safety margins: far above the rounding of a
 #: distance, so a skipped evaluation never changes a result.
@@ -145,7 +146,6 @@ class _ProtoSphere:
         # A float32 backend's clearances are good to about 1e-7 of the scale: it asks for more.
         self.margin = max(SAFETY_MARGIN, getattr(backend, "margin", SAFETY_MARGIN)) * shape.scale
         self.count = 0
-        self._longest = self._bound = None  # the fast mode's refinement bookkeeping, per cell
         self.centers = np.empty((64, self.dim))
         self.radii = np.empty(64)
         self.rounds = np.empty(64, dtype=np.int64)
@@ -193,6 +193,9 @@ class _ProtoSphere:
         self.prototypes = self.backend.prototypes(
             self.shape, cells["lower"], cells["upper"], cells["reach"], points, clearance, cells["wall"]
         )
+        # The fast mode's refinement keeps, per cell, its longest side and a clearance bound.
+        self._longest = (cells["upper"] - cells["lower"]).max(axis=1)
+        self._bound = cells["reach"].copy()
 
     @property
     def cell_lower(self):
@@ -304,9 +307,6 @@ class _ProtoSphere:
         window has come down to it.
         """
         store = self.prototypes
-        if self._longest is None or len(self._longest) != len(store):
-            self._longest = (store.cell_upper - store.cell_lower).max(axis=1)
-            self._bound = store.reach.copy()
         total = 0
         for _ in range(4 * self.dim):
             low = (1 - window) * top
@@ -383,7 +383,7 @@ def nearest_sphere(points, centers, radii):
     from scipy.spatial import cKDTree
 
     tree = cKDTree(centers)
-    distance, near = tree.query(points, k=NEAREST_BY_SEARCH // 4)
+    distance, near = tree.query(points, k=NEAREST_CANDIDATES)
     gaps = distance - radii[near]
     # Smallest gap, the lowest id among equals (as argmin over all spheres in id order).
     best_gap = gaps.min(axis=1)

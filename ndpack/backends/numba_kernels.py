@@ -57,14 +57,14 @@ def wall_floor(x, lower, upper, wall, cell):
     return wall[cell] - math.sqrt(length2)
 
 
-def free_space(x, g, prm, centers, radii, nbr, row, floor, seen):
-    """Clearance of ``x`` and, in ``g``, the direction away from its nearest obstacle.
+def free_space(x, g, prm, centers, radii, nbr, row, floor):
+    """Clearance of ``x`` and the boundary's distance where it was evaluated (-inf where not);
+    in ``g``, the direction away from the nearest obstacle.
 
     Away from the shape's boundary it is ``-grad sd`` by central differences of step ``H``
     (the reference uses the analytic gradient); away from a sphere, the unit vector from its centre.
     """
     clearance, nearest, boundary = nearest_obstacle(x, prm, centers, radii, nbr, row, floor)
-    seen[0] = boundary
     if nearest < 0:
         for k in range(D):
             xk = x[k]
@@ -85,7 +85,7 @@ def free_space(x, g, prm, centers, radii, nbr, row, floor, seen):
                 g[k] = g[k] / length
             else:  # exactly at a centre: any way out will do, take axis 0 as the reference does
                 g[k] = 1.0 if k == 0 else 0.0
-    return clearance
+    return clearance, boundary
 
 
 def clearance_one(i, points, prm, centers, radii, nbr, out, out_direction):
@@ -94,8 +94,7 @@ def clearance_one(i, points, prm, centers, radii, nbr, out, out_direction):
     g = point()
     for k in range(D):
         x[k] = points[i, k]
-    seen = point()
-    out[i] = free_space(x, g, prm, centers, radii, nbr, i, -math.inf, seen)
+    out[i] = free_space(x, g, prm, centers, radii, nbr, i, -math.inf)[0]
     if out_direction.shape[0] > i:
         for k in range(D):
             out_direction[i, k] = g[k]
@@ -140,7 +139,6 @@ def converge_from(x, g, best, cell, row, lower, upper, wall, prm, centers, radii
     in the packing are spared.
     """
     anchor = point()
-    seen = point()
     anchored = -math.inf
     for k in range(D):
         best[k] = x[k]
@@ -152,9 +150,9 @@ def converge_from(x, g, best, cell, row, lower, upper, wall, prm, centers, radii
         for k in range(D):
             length2 += (x[k] - anchor[k]) ** 2
         floor = max(wall_floor(x, lower, upper, wall, cell), anchored - math.sqrt(length2) - 1e-3 * H)
-        c = free_space(x, g, prm, centers, radii, nbr, row, floor, seen)
-        if seen[0] > -math.inf:
-            anchored = seen[0]
+        c, boundary = free_space(x, g, prm, centers, radii, nbr, row, floor)
+        if boundary > -math.inf:
+            anchored = boundary
             for k in range(D):
                 anchor[k] = x[k]
         if c > best_clearance:

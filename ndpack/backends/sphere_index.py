@@ -12,8 +12,10 @@ Buckets are singly linked lists threaded through the sphere ids (``heads`` per b
 per sphere), so inserting a sphere is O(1) and spheres are never moved. The kernels are the
 per-point functions ``index_*`` in :mod:`ndpack.backends.numba_kernels`.
 
-SciPy's k-d tree answers the same questions, but it cannot grow (a rebuild per round would cost
-O(m log m) every round) and cannot run inside a Numba kernel next to the prototype's work.
+SciPy's k-d tree answers the same questions, but it cannot be called from inside a Numba (or
+CUDA) kernel, where the queries run next to the prototype's work, and it cannot grow: a rebuild
+per round costs 0.39 s at 1,000,000 spheres (measured on the 2-core machine), against the few
+hundred rounds a million-sphere packing takes.
 """
 
 from __future__ import annotations
