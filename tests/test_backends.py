@@ -294,8 +294,7 @@ def test_small_device_packing_equals_host_packing(name, monkeypatch):
     """The whole driver on device-resident prototypes gives the numba backend's packing."""
     from ndpack.backends.prototypes import DevicePrototypes
 
-    # Small chunks and a one-column first table: every path of the neighbour kernels runs.
-    monkeypatch.setattr(DevicePrototypes, "NEAR_CHUNK", 3)
+    # A one-column first table: the neighbour tables widen, every path of their kernels runs.
     monkeypatch.setattr(DevicePrototypes, "FIRST_WIDTH", 1)
     shape = nd.Box([0.0, 0.0], [1.0, 1.0]) - nd.Ball([1.0, 1.0], 0.4)
     for batch in (1, 4):
@@ -323,6 +322,19 @@ def test_warp_float32_packing_is_verified_in_float64():
     assert packing.verify().ok
     reference = nd.pack(shape, 150, backend="numpy")
     assert abs(packing.fill - reference.fill) <= 0.01 * reference.fill
+
+
+@pytest.mark.parametrize("name", DEVICE_STORES)
+def test_small_fast_mode_on_the_device_store_equals_host_store(name):
+    """The fast mode on device-resident prototypes (cells split there, neighbours and touched
+    prototypes found through the device's sphere index) gives the numba backend's packing."""
+    shape = nd.Box([0.0, 0.0], [1.0, 1.0])
+    packing = nd.pack(shape, 120, grid=8, mode="fast", backend=name)
+    reference = nd.pack(shape, 120, grid=8, mode="fast", backend="numba")
+    on_cpu = SIMULATED or str(getattr(backends.get_backend(name), "device", "cpu")) == "cpu"
+    same = len(reference) if on_cpu else 3  # see test_small_device_packing_equals_host_packing
+    np.testing.assert_allclose(packing.radii[:same], reference.radii[:same], rtol=0, atol=1e-12 if on_cpu else 1e-6)
+    assert packing.verify().ok and abs(packing.fill / reference.fill - 1) < 0.005
 
 
 @pytest.mark.skipif(SIMULATED or _working("numba-cuda"), reason="runs only where there is no GPU")

@@ -52,14 +52,14 @@ def index_bound(lower, upper, reach, centers, radii, origin, top, heads, nxt, le
                 level_count, level_rmax, out):
     for b in prange(lower.shape[0]):
         out[b] = index_near(b, lower, upper, reach[b], 0, centers, radii, origin, top, heads, nxt, level_of,
-                            level_head, level_next, level_count, level_rmax, heads.reshape(1, -1), 0)[0]
+                            level_head, level_next, level_count, level_rmax, heads.reshape(1, -1), 0, 0)[0]
 
 
 def index_fill(lower, upper, bound, centers, radii, origin, top, heads, nxt, level_of, level_head, level_next,
                level_count, level_rmax, counts, out):
     for b in prange(lower.shape[0]):
         counts[b] = index_near(b, lower, upper, bound[b], 1, centers, radii, origin, top, heads, nxt, level_of,
-                               level_head, level_next, level_count, level_rmax, out, out.shape[1])[1]
+                               level_head, level_next, level_count, level_rmax, out, b, out.shape[1])[1]
 '''
 
 #: Central-difference step, as a fraction of the shape's scale: float64 rounding in the
@@ -145,7 +145,7 @@ class NumbaBackend(Backend):
         return out_points, out_clearance
 
     def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
-        namespace = _geometry(box_lower.shape[1])
+        namespace = geometry_kernels(box_lower.shape[1])
         count = len(box_lower)
         if len(centers) == 0 or count == 0:
             table = np.zeros((count, 0), dtype=np.int64)
@@ -168,11 +168,11 @@ class NumbaBackend(Backend):
         from .sphere_index import SphereIndex
 
         if dim not in self._indexes:
-            self._indexes[dim] = SphereIndex(_geometry(dim)["index_insert_range"])
+            self._indexes[dim] = SphereIndex(geometry_kernels(dim)["index_insert_range"])
         return self._indexes[dim]
 
     def touched(self, points, clearance, new_centers, new_radii):
-        namespace = _geometry(points.shape[1])
+        namespace = geometry_kernels(points.shape[1])
         points, clearance = _f64(points), _f64(clearance)
         if len(new_radii) <= INDEX_NEW_SPHERES:
             out = np.empty(len(points), dtype=np.bool_)
@@ -188,18 +188,18 @@ class NumbaBackend(Backend):
         return bound < clearance
 
 
-_geometry_cache = {}
+_geometry_kernels = {}
 
 
-def _geometry(dim):
+def geometry_kernels(dim):
     """The shape-free kernels (near_spheres, touched) for dimension ``dim``."""
-    if dim in _geometry_cache:
-        return _geometry_cache[dim]
+    if dim in _geometry_kernels:
+        return _geometry_kernels[dim]
     from ..kernels.compile import numba_namespace
     from ..kernels.program import shape_free
 
-    _geometry_cache[dim] = numba_namespace(shape_free(dim), "cpu", KERNELS + ENTRIES, {"H": 1.0}, _jit)
-    return _geometry_cache[dim]
+    _geometry_kernels[dim] = numba_namespace(shape_free(dim), "cpu", KERNELS + ENTRIES, {"H": 1.0}, _jit)
+    return _geometry_kernels[dim]
 
 
 def _f64(array):

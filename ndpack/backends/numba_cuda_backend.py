@@ -89,11 +89,16 @@ def select_all(clearance, polished, points, low, high, unpolished, top, relative
             append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
 
 
-def touched_select(points, clearance, polished, centers, radii, counter, out_ids, out_values, out_points,
-                   out_flags):
+def touched_index_select(points, clearance, polished, centers, radii, origin, top, heads, nxt, level_of,
+                         level_head, level_next, level_count, level_rmax, scratch, counter, out_ids, out_values,
+                         out_points, out_flags):
     i = cuda.grid(1)
     if i < points.shape[0]:
-        if touches(i, points, clearance, centers, radii):
+        c = clearance[i]
+        # Touched: a new sphere's gap from the point is below its clearance (the index of the
+        # new spheres tightens the bound below it).
+        if c > -math.inf and index_near(i, points, points, c, 0, centers, radii, origin, top, heads, nxt, level_of,
+                                        level_head, level_next, level_count, level_rmax, scratch, 0, 0)[0] < c:
             append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
 
 
@@ -106,41 +111,21 @@ def gather_ids(ids, points, clearance, out_points, out_clearance):
         out_clearance[b] = clearance[i]
 
 
-def near_bound_ids(ids, lower, upper, reach, centers, radii, chunks, bound):
-    t = cuda.grid(1)
-    if t < ids.shape[0] * chunks:
-        b = t // chunks
+def index_bound_ids(ids, lower, upper, reach, centers, radii, origin, top, heads, nxt, level_of, level_head,
+                    level_next, level_count, level_rmax, scratch, bound):
+    b = cuda.grid(1)
+    if b < ids.shape[0]:
         i = ids[b]
-        half2 = 0.0
-        for k in range(D):
-            half2 += 0.25 * (upper[i, k] - lower[i, k]) ** 2
-        half = math.sqrt(half2)
-        size = (radii.shape[0] + chunks - 1) // chunks
-        best = reach[i]
-        for s in range((t % chunks) * size, min((t % chunks + 1) * size, radii.shape[0])):
-            length2 = 0.0
-            for k in range(D):
-                u = 0.5 * (lower[i, k] + upper[i, k]) - centers[s, k]
-                length2 += u * u
-            best = min(best, math.sqrt(length2) - radii[s] + half)
-        cuda.atomic.min(bound, b, best)
+        bound[b] = index_near(i, lower, upper, reach[i], 0, centers, radii, origin, top, heads, nxt, level_of,
+                              level_head, level_next, level_count, level_rmax, scratch, 0, 0)[0]
 
 
-def near_fill_ids(ids, lower, upper, centers, radii, chunks, bound, found, out):
-    t = cuda.grid(1)
-    if t < ids.shape[0] * chunks:
-        b = t // chunks
-        i = ids[b]
-        size = (radii.shape[0] + chunks - 1) // chunks
-        for s in range((t % chunks) * size, min((t % chunks + 1) * size, radii.shape[0])):
-            outside2 = 0.0
-            for k in range(D):
-                u = max(lower[i, k] - centers[s, k], centers[s, k] - upper[i, k], 0.0)
-                outside2 += u * u
-            if math.sqrt(outside2) - radii[s] <= bound[b]:
-                slot = cuda.atomic.add(found, b, 1)
-                if slot < out.shape[1]:
-                    out[b, slot] = s
+def index_fill_ids(ids, lower, upper, bound, centers, radii, origin, top, heads, nxt, level_of, level_head,
+                   level_next, level_count, level_rmax, found, out):
+    b = cuda.grid(1)
+    if b < ids.shape[0]:
+        found[b] = index_near(ids[b], lower, upper, bound[b], 1, centers, radii, origin, top, heads, nxt, level_of,
+                              level_head, level_next, level_count, level_rmax, out, b, out.shape[1])[1]
 
 
 def near_finish(found, sphere_count, width, out):
@@ -151,6 +136,19 @@ def near_finish(found, sphere_count, width, out):
         cuda.atomic.max(width, 0, found[b])
 
 
+def set_points(ids, values, out):
+    b = cuda.grid(1)
+    if b < ids.shape[0]:
+        for k in range(D):
+            out[ids[b], k] = values[b, k]
+
+
+def set_floats(ids, values, out):
+    b = cuda.grid(1)
+    if b < ids.shape[0]:
+        out[ids[b]] = values[b]
+
+
 def move_ids(ids, starts, tries, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
              steps, h, polish):
     b = cuda.grid(1)
@@ -159,7 +157,8 @@ def move_ids(ids, starts, tries, points, clearance, polished, lower, upper, wall
                  steps, polish)
 '''
 ENTRY_NAMES = ("distance_all", "clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
-               "select_all", "max_all", "touched_select", "gather_ids", "near_bound_ids", "near_fill_ids", "near_finish", "move_ids")
+               "select_all", "max_all", "touched_index_select", "gather_ids", "index_bound_ids", "index_fill_ids",
+               "near_finish", "move_ids", "set_points", "set_floats")
 THREADS_PER_BLOCK = 128
 
 
@@ -339,6 +338,18 @@ class _CudaDevice:
 
     def fill(self, array, value):
         array.copy_to_device(np.full(array.shape, value, dtype=array.dtype), stream=self.stream)
+
+    def extend(self, array, host, kind):
+        longer = self.empty(len(array) + len(host), kind)
+        if len(array):
+            longer[: len(array)].copy_to_device(array, stream=self.stream)
+        self.write(longer, len(array), host, kind)
+        return longer
+
+    def write(self, array, start, host, kind):
+        if len(host):
+            array[start : start + len(host)].copy_to_device(
+                np.ascontiguousarray(host, dtype=self.DTYPES[kind]), stream=self.stream)
 
     def fetch(self, *pairs):
         staged = []

@@ -10,12 +10,13 @@ Array arguments: ``points``, ``lower``, ``upper``, ``centers`` (n, D) float64; `
 ``steps``, ``prm`` 1-D float64; ``nbr`` (n, k) int64 neighbour table padded with ``len(radii)``.
 """
 
-# ruff: noqa: F821  (D, H, sd and point exist where this text runs)
+# ruff: noqa: F821  (D, H, sd, sd_feature, sd_at, sd_slope and point exist where this text runs)
 
 
 def nearest_obstacle(x, prm, centers, radii, nbr, row, floor):
-    """Clearance of ``x``, its nearest sphere (-1 when the shape's boundary is nearest), and the
-    boundary's distance where it was evaluated (-inf where not).
+    """Clearance of ``x``, its nearest sphere (-1 when the shape's boundary is nearest), the
+    boundary's distance where it was evaluated (-inf where not), and the boundary's nearest
+    feature there (``sd_feature``; -1 where not evaluated or where the shape has none).
 
     ``floor`` is a lower bound of the boundary's distance at ``x`` (from the cell's wall, see
     :func:`wall_floor`): a sphere nearer than that is nearest without evaluating the shape, which
@@ -40,11 +41,12 @@ def nearest_obstacle(x, prm, centers, radii, nbr, row, floor):
             gap_min = gap
             nearest = s
     if nearest >= 0 and gap_min < floor:
-        return gap_min, nearest, -math.inf
-    boundary = -sd(x, prm)
+        return gap_min, nearest, -math.inf, -1.0
+    feature = sd_feature(x, prm)
+    boundary = -sd_at(x, prm, feature)
     if gap_min < boundary:  # the boundary wins over an equal sphere
-        return gap_min, nearest, boundary
-    return boundary, -1, boundary
+        return gap_min, nearest, boundary, feature
+    return boundary, -1, boundary, feature
 
 
 def wall_floor(x, lower, upper, wall, cell):
@@ -61,11 +63,15 @@ def free_space(x, g, prm, centers, radii, nbr, row, floor):
     """Clearance of ``x`` and the boundary's distance where it was evaluated (-inf where not);
     in ``g``, the direction away from the nearest obstacle.
 
-    Away from the shape's boundary it is ``-grad sd`` by central differences of step ``H``
-    (the reference uses the analytic gradient); away from a sphere, the unit vector from its centre.
+    Away from the shape's boundary it is ``-grad sd``: closed-form from the nearest feature where
+    the shape has one (meshes, outlines), else by central differences of step ``H`` (the
+    reference uses the analytic gradient); away from a sphere, the unit vector from its centre.
     """
-    clearance, nearest, boundary = nearest_obstacle(x, prm, centers, radii, nbr, row, floor)
-    if nearest < 0:
+    clearance, nearest, boundary, feature = nearest_obstacle(x, prm, centers, radii, nbr, row, floor)
+    if nearest < 0 and feature >= 0.0:
+        for k in range(D):
+            g[k] = -sd_slope(x, prm, feature, -boundary, k)
+    elif nearest < 0:
         for k in range(D):
             xk = x[k]
             x[k] = xk + H
@@ -282,13 +288,13 @@ def index_insert(s, centers, radii, origin, top, heads, nxt, level_of, level_hea
 
 
 def index_near(b, lower, upper, bound, counting, centers, radii, origin, top, heads, nxt, level_of, level_head,
-               level_next, level_count, level_rmax, out, width):
+               level_next, level_count, level_rmax, out, row, width):
     """The spheres near box ``b`` (``lower[b]``, ``upper[b]``), found through the index.
 
     ``counting`` 0: returns ``bound`` tightened by every sphere within it of the box (the upper
     bound of the clearance in the box: a sphere's gap from the box centre plus half a diagonal).
     ``counting`` 1: counts the spheres that come within ``bound`` of the box, and writes the
-    first ``width`` of them into ``out[b]``. Both visit the cells of each level within ``bound``
+    first ``width`` of them into ``out[row]``. Both visit the cells of each level within ``bound``
     (plus the level's largest radius) of the box, or the level's list where that is shorter.
     Returns ``(bound, count)``.
     """
@@ -344,7 +350,7 @@ def index_near(b, lower, upper, bound, counting, centers, radii, origin, top, he
                     bound = min(bound, centre_gap(b, s, lower, upper, centers, radii) + half)
                 elif box_gap(b, s, lower, upper, centers, radii) <= bound:
                     if found < width:
-                        out[b, found] = s
+                        out[row, found] = s
                     found += 1
             s = level_next[s] if listed else nxt[s]
     return bound, found

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from .base import no_wall
+from .sphere_index import DeviceIndex
 
 #: :meth:`DevicePrototypes.leaders` asks for the prototypes within a window (this fraction) below
 #: the largest clearance, widened by ``WIDEN`` until it holds the leaders and those near them, and
@@ -217,19 +218,20 @@ class DevicePrototypes(Prototypes):
         ``fill(array, value)``, ``fetch(*(array, count))`` (host copies of the first ``count``
         rows of each array, after one synchronisation), ``launch(kernel_name, threads, *args)``,
         ``spheres(centers, radii)`` (device copies, never empty), ``params`` (the shape's
-        parameters on the device) and ``h`` (the finite-difference step). Kinds are ``"float"``,
-        ``"point"`` and ``"index"``. The kernels are ``max_all``, ``select_all``,
-        ``touched_select``, ``gather_ids``, ``near_bound_ids``, ``near_fill_ids``, ``near_finish`` and
-        ``move_ids`` of the backend's kernel text.
+        parameters on the device), ``h`` (the finite-difference step), ``write(array, start,
+        host, kind)`` (rows from ``start`` replaced) and ``extend(array, host, kind)`` (a longer
+        device array: the rows of ``array``, then ``host``'s). Kinds are ``"float"``, ``"point"`` and
+        ``"index"``. The kernels are ``max_all``, ``select_all``, ``touched_index_select``,
+        ``gather_ids``, ``index_bound_ids``, ``index_fill_ids``, ``near_finish``, ``move_ids``,
+        ``set_points`` and ``set_floats`` of the backend's kernel text.
+
+    The spheres near a cell, and the prototypes a new sphere touches, are found through a
+    :class:`~ndpack.backends.sphere_index.DeviceIndex`: built on the host, queried on the device.
     Other parameters as in :class:`Prototypes`.
     """
 
     #: Neighbour-table columns allocated at first; grown to the widest row seen.
     FIRST_WIDTH = 8
-    #: Spheres one thread checks against one prototype's cell when building neighbour tables.
-    NEAR_CHUNK = 32
-    #: Most threads one launch may number.
-    MAX_THREADS = 2**31 - 1
     #: Answer rows copied back with the counter, at least; more after larger answers.
     FIRST_PREFIX = 64
 
@@ -246,17 +248,28 @@ class DevicePrototypes(Prototypes):
         self.answers = (device.empty(count, "index"), device.empty(count, "float"),
                         device.empty(count, "point"), device.empty(count, "index"))
         self.d_counter, self.d_top = device.empty(1, "index"), device.empty(1, "float")
+        self.d_scratch = device.empty((1, 1), "index")  # the unused table of a bound-only index query
+        self.sphere_index = DeviceIndex(self.dim, device)
         self.width = self.FIRST_WIDTH
         self.prefix = min(count, self.FIRST_PREFIX)
         self._window = FIRST_WINDOW
         self._steps = {}
 
     def split(self, ids, lower, upper, reach, wall, points, clearance):
-        # For now the whole set goes back to the host and up again: O(n) copies per refinement.
-        old_points, old_clearance = self.all()
+        count = len(ids)
         new = super().split(ids, lower, upper, reach, wall, points, clearance)
-        self.__init__(self.device, self.cell_lower, self.cell_upper, self.reach,
-                      np.concatenate([old_points, points]), np.concatenate([old_clearance, clearance]), self.wall)
+        device, up = self.device, self.device.upload
+        d_ids = up(ids, "index")
+        # The split cells' rows are rewritten where they are; the new ones are appended on the
+        # device (a device-side copy of the old rows), so nothing comes back to the host.
+        for name, rows, kind in (("d_lower", lower, "point"), ("d_upper", upper, "point"),
+                                 ("d_reach", reach, "float"), ("d_wall", wall, "float")):
+            device.launch(f"set_{kind}s", count, d_ids, up(rows[:count], kind), getattr(self, name))
+            setattr(self, name, device.extend(getattr(self, name), rows[count:], kind))
+        self.d_points = device.extend(self.d_points, points, "point")
+        self.d_clearance = device.extend(self.d_clearance, clearance, "float")
+        self.d_polished = device.extend(self.d_polished, np.zeros(len(points), dtype=np.int64), "index")
+        self.answers = tuple(device.empty(len(self), kind) for kind in ("index", "float", "point", "index"))
         return new
 
     def _compact(self, kernel, *args):
@@ -308,8 +321,9 @@ class DevicePrototypes(Prototypes):
 
     def touched(self, new_centers, new_radii):
         up = self.device.upload
-        ids, _, points, _, _ = self._compact("touched_select", self.d_points, self.d_clearance, self.d_polished,
-                                             up(new_centers, "point"), up(new_radii, "float"))
+        index = DeviceIndex(self.dim, self.device).sync(new_centers, new_radii)
+        ids, _, points, _, _ = self._compact("touched_index_select", self.d_points, self.d_clearance, self.d_polished,
+                                             up(new_centers, "point"), up(new_radii, "float"), *index, self.d_scratch)
         return ids, points
 
     def gather(self, ids):
@@ -323,42 +337,40 @@ class DevicePrototypes(Prototypes):
         points, clearance = device.fetch((out_points, count), (out_clearance, count))
         return points, clearance
 
-    def _neighbours(self, d_ids, count, d_centers, d_radii):
-        """(count, width) table of the spheres near each prototype's cell, padded with m.
+    def _neighbours(self, ids, d_ids, centers, radii):
+        """The spheres on the device and the (k, width) table of those near the cells of ``ids``
+        (k,), padded with m.
 
-        The same spheres as :meth:`Backend.near_spheres` finds; the kernels split the spheres
-        into chunks of about ``NEAR_CHUNK`` so that many threads share each prototype's walk.
+        The same spheres as :meth:`Backend.near_spheres` finds (through the sphere index, in any
+        order): one pass tightens each cell's reach (kept, on both sides, as the host store
+        keeps it), one fills the rows.
         """
-        device = self.device
-        spheres = d_radii.shape[0]
-        # Threads are numbered in 32 bits (Warp's wp.tid()): with many spheres and many rows,
-        # fewer and longer chunks.
-        chunks = max(1, min(-(-spheres // self.NEAR_CHUNK), self.MAX_THREADS // max(count, 1)))
+        device, count = self.device, len(ids)
+        d_centers, d_radii = device.spheres(centers, radii)
+        index = self.sphere_index.sync(centers, radii)
         bound = device.empty(count, "float")
-        device.fill(bound, np.inf)
-        device.launch("near_bound_ids", count * chunks, d_ids, self.d_lower, self.d_upper, self.d_reach,
-                      d_centers, d_radii, chunks, bound)
+        device.launch("index_bound_ids", count, d_ids, self.d_lower, self.d_upper, self.d_reach, d_centers, d_radii,
+                      *index, self.d_scratch, bound)
         found = device.empty(count, "index")
         while True:
             table = device.empty((count, self.width), "index")
-            device.fill(found, 0)
             device.fill(self.d_counter, 0)
-            device.launch("near_fill_ids", count * chunks, d_ids, self.d_lower, self.d_upper, d_centers, d_radii,
-                          chunks, bound, found, table)
-            device.launch("near_finish", count, found, spheres, self.d_counter, table)
-            widest = int(device.fetch((self.d_counter, 1))[0][0])
-            if widest <= self.width:
-                return table
-            self.width = widest
+            device.launch("index_fill_ids", count, d_ids, self.d_lower, self.d_upper, bound, d_centers, d_radii,
+                          *index, found, table)
+            device.launch("near_finish", count, found, d_radii.shape[0], self.d_counter, table)
+            widest, self.reach[ids] = device.fetch((self.d_counter, 1), (bound, count))
+            if widest[0] <= self.width:
+                device.launch("set_floats", count, d_ids, bound, self.d_reach)
+                return d_centers, d_radii, table
+            self.width = int(widest[0])
 
     def move(self, ids, centers, radii, steps, starts=None, polish=False):
         count = len(ids)
         if count == 0:
             return
         device = self.device
-        d_centers, d_radii = device.spheres(centers, radii)
         d_ids = device.upload(ids, "index")
-        table = self._neighbours(d_ids, count, d_centers, d_radii)
+        d_centers, d_radii, table = self._neighbours(ids, d_ids, centers, radii)
         tries = 0 if starts is None else len(starts)
         d_starts = device.upload(starts if tries else np.zeros((1, count, self.dim)), "point")
         key = (id(steps), len(steps))

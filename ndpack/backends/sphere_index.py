@@ -81,3 +81,51 @@ class SphereIndex:
             self.count = count
             self.first, self.last = centers[0].copy(), centers[count - 1].copy()
         return self.arrays
+
+
+#: Device kinds of the index arrays (see ``Prototypes``' device adapters), in :attr:`SphereIndex.arrays`
+#: order; None for the scalar ``top``.
+_KINDS = ("float", None, "index", "index", "index", "index", "index", "index", "float")
+#: Positions of the tables a sync rewrites whole (bucket heads and the per-level ones), and of
+#: the per-sphere ones of which only the new spheres' rows change.
+_WHOLE, _ROWS = (2, 5, 7, 8), (3, 4, 6)
+
+
+class DeviceIndex:
+    """A :class:`SphereIndex` built on the host and mirrored on a GPU, for the device kernels'
+    queries (``index_near``).
+
+    Inserting is serial and O(1) a sphere, so the host does it; a sync then copies up only what
+    changed since the last one: the new spheres' rows, the bucket heads and the level tables.
+
+    Parameters
+    ----------
+    dim : int
+    device : object
+        The store's device adapter: ``upload(host, kind)`` and ``write(array, start, host, kind)``.
+    """
+
+    def __init__(self, dim: int, device):
+        from .numba_backend import geometry_kernels
+
+        self.host = SphereIndex(geometry_kernels(dim)["index_insert_range"])
+        self.device = device
+        self.arrays = None
+        self._mirrored, self._count = None, 0
+
+    def sync(self, centers: np.ndarray, radii: np.ndarray) -> list:
+        """The device copies of the index of ``centers`` (m, d) and ``radii`` (m,), in
+        :attr:`SphereIndex.arrays` order (``top`` stays a float)."""
+        arrays = self.host.sync(centers, radii)
+        count = self.host.count
+        if arrays is not self._mirrored:  # a new index (first use, or grown past its capacity)
+            self.arrays = [value if kind is None else self.device.upload(value, kind)
+                           for value, kind in zip(arrays, _KINDS)]
+        elif count > self._count:
+            for position in _WHOLE:
+                self.device.write(self.arrays[position], 0, arrays[position], _KINDS[position])
+            for position in _ROWS:
+                self.device.write(self.arrays[position], self._count, arrays[position][self._count : count],
+                                  _KINDS[position])
+        self._mirrored, self._count = arrays, count
+        return self.arrays

@@ -228,6 +228,17 @@ class _WarpDevice:
     def fill(self, array, value):
         array.fill_(value)
 
+    def extend(self, array, host, kind):
+        longer = self.empty(len(array) + len(host), kind)
+        if len(array):
+            self.wp.copy(longer, array, count=len(array))
+        self.write(longer, len(array), host, kind)
+        return longer
+
+    def write(self, array, start, host, kind):
+        if len(host):
+            self.wp.copy(array, self.upload(host, kind), dest_offset=start, count=len(host))
+
     def fetch(self, *pairs):
         wp = self.wp
         if self.where.is_cpu:

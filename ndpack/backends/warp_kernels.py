@@ -6,13 +6,14 @@ and ``sd(p, prm)``. Every kernel mirrors a step of the NumPy reference
 (:class:`ndpack.backends.numpy_backend.NumpyBackend`) and of the Numba per-point functions.
 """
 
-# ruff: noqa: F821  (F, D, VecD, sd and wp exist where this text runs)
+# ruff: noqa: F821  (F, D, VecD, sd, sd_feature, sd_at, sd_slope and wp exist where this text runs)
 
 
 @wp.func
 def nearest_obstacle(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
                      nbr: wp.array2d(dtype=wp.int32), row: int, floor: F):
-    """Clearance of ``x`` and its nearest sphere (-1 when the shape's boundary is nearest).
+    """Clearance of ``x``, its nearest sphere (-1 when the shape's boundary is nearest), and the
+    boundary's nearest feature (-1 where not evaluated, or where the shape has none).
 
     A sphere nearer than ``floor``, a lower bound of the boundary's distance, is nearest without
     evaluating the shape (see the Numba kernels). Ties resolve by sphere id, whatever the row's order.
@@ -29,11 +30,12 @@ def nearest_obstacle(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=Ve
             gap_min = gap
             nearest = s
     if nearest >= 0 and gap_min < floor:
-        return gap_min, nearest
-    boundary = -sd(x, prm)
+        return gap_min, nearest, F(-1.0)
+    feature = sd_feature(x, prm)
+    boundary = -sd_at(x, prm, feature)
     if gap_min < boundary:  # the boundary wins over an equal sphere
-        return gap_min, nearest
-    return boundary, int(-1)
+        return gap_min, nearest, feature
+    return boundary, int(-1), feature
 
 
 @wp.func
@@ -45,11 +47,15 @@ def wall_floor(x: VecD, lower: VecD, upper: VecD, wall: F):
 @wp.func
 def free_space(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
                nbr: wp.array2d(dtype=wp.int32), row: int, h: F, floor: F):
-    """Clearance of ``x`` and the direction away from its nearest obstacle (``-grad sd`` by
-    central differences of step ``h``, or away from the nearest sphere's centre)."""
-    clearance, nearest = nearest_obstacle(x, prm, centers, radii, nbr, row, floor)
+    """Clearance of ``x`` and the direction away from its nearest obstacle (``-grad sd``,
+    closed-form from the nearest feature where the shape has one, else by central differences of
+    step ``h``; or away from the nearest sphere's centre)."""
+    clearance, nearest, feature = nearest_obstacle(x, prm, centers, radii, nbr, row, floor)
     g = VecD()
-    if nearest < 0:
+    if nearest < 0 and feature >= F(0.0):
+        for k in range(D):
+            g[k] = -sd_slope(x, prm, feature, -clearance, k)
+    elif nearest < 0:
         for k in range(D):
             q = x
             q[k] = x[k] + h
@@ -210,16 +216,6 @@ def select_all(clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32),
 
 
 @wp.kernel
-def touched_select(points: wp.array(dtype=VecD), clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32),
-                   centers: wp.array(dtype=VecD), radii: wp.array(dtype=F), counter: wp.array(dtype=wp.int32),
-                   out_ids: wp.array(dtype=wp.int32), out_values: wp.array(dtype=F),
-                   out_points: wp.array(dtype=VecD), out_flags: wp.array(dtype=wp.int32)):
-    i = wp.tid()
-    if touches(i, points, clearance, centers, radii) != 0:
-        append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
-
-
-@wp.kernel
 def gather_ids(ids: wp.array(dtype=wp.int32), points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
                out_points: wp.array(dtype=VecD), out_clearance: wp.array(dtype=F)):
     b = wp.tid()
@@ -227,42 +223,150 @@ def gather_ids(ids: wp.array(dtype=wp.int32), points: wp.array(dtype=VecD), clea
     out_clearance[b] = clearance[ids[b]]
 
 
-# The spheres near each prototype's cell, in three passes over (prototype, chunk of spheres)
-# pairs: one thread per prototype would walk all m spheres alone, and on a GPU that serial walk is
-# the slowest part of a round. Thread t serves prototype t // chunks and chunk t % chunks.
+# ---------------------------------------------------------------------------- the sphere index
+# Queries of the index the host builds (ndpack.backends.sphere_index, and index_near of the Numba
+# kernels, which these follow): a hashed grid per octave of radius, each bucket a linked list.
+
+#: The index is built in float64 on the host. In float32 a query's cell ranges may round to a
+#: neighbouring cell, so they are widened by this many cells and a bucket's spheres are taken
+#: without checking their cell (extra spheres in a table are harmless, missing ones are not).
+INDEX_SLACK = wp.constant(0.0 if F is wp.float64 else 1.0)
+
+
+@wp.func
+def index_bucket(level: int, cell: VecD, mask: int):
+    """Hash bucket of grid ``cell`` of ``level``: the Numba kernels' hash, in unsigned arithmetic
+    (the same bits as their wrapping int64 one wherever the mask reaches)."""
+    key = wp.uint64(level + 1)
+    for k in range(D):
+        key = key * wp.uint64(1000003) + wp.uint64(wp.int64(cell[k]))
+    key = key ^ (key >> wp.uint64(29))
+    return int(key & wp.uint64(mask))
+
+
+@wp.func
+def index_near(lo: VecD, hi: VecD, bound: F, counting: int, centers: wp.array(dtype=VecD),
+               radii: wp.array(dtype=F), origin: wp.array(dtype=F), top: F, heads: wp.array(dtype=wp.int32),
+               nxt: wp.array(dtype=wp.int32), level_of: wp.array(dtype=wp.int32),
+               level_head: wp.array(dtype=wp.int32), level_next: wp.array(dtype=wp.int32),
+               level_count: wp.array(dtype=wp.int32), level_rmax: wp.array(dtype=F),
+               out: wp.array2d(dtype=wp.int32), row: int):
+    """The spheres near the box ``lo``-``hi``: ``counting`` 0 tightens ``bound`` (a sphere's gap
+    from the box centre plus half a diagonal), 1 counts those within ``bound`` of the box and
+    writes the first ones into ``out[row]``. Returns ``(bound, count)``."""
+    middle = F(0.5) * (lo + hi)
+    half = F(0.5) * wp.length(hi - lo)
+    slack = F(INDEX_SLACK)
+    reach = bound
+    found = int(0)
+    low = VecD()
+    high = VecD()
+    cell = VecD()
+    mask = heads.shape[0] - 1
+    side = top
+    for level in range(level_head.shape[0]):
+        if level > 0:
+            side = side * F(0.5)
+        if level_count[level] == 0:
+            continue
+        cells = F(1.0)
+        for k in range(D):
+            low[k] = wp.floor((lo[k] - reach - level_rmax[level] - origin[k]) / side) - slack
+            high[k] = wp.floor((hi[k] + reach + level_rmax[level] - origin[k]) / side) + slack
+            cells = cells * (high[k] - low[k] + F(1.0))
+        listed = cells > F(level_count[level])
+        s = level_head[level]
+        if not listed:
+            cell = low
+            s = heads[index_bucket(level, cell, mask)]
+        while True:
+            if s < 0:
+                if listed:
+                    break
+                k = int(0)  # the next cell, like an odometer
+                while k < D:
+                    cell[k] = cell[k] + F(1.0)
+                    if cell[k] <= high[k]:
+                        break
+                    cell[k] = low[k]
+                    k += 1
+                if k == D:
+                    break
+                s = heads[index_bucket(level, cell, mask)]
+                continue
+            mine = listed
+            if not listed and level_of[s] == level:  # skip other cells' spheres in this bucket
+                mine = True
+                if slack == F(0.0):
+                    for k in range(D):
+                        if wp.floor((centers[s][k] - origin[k]) / side) != cell[k]:
+                            mine = False
+            if mine:
+                if counting == 0:
+                    bound = wp.min(bound, wp.length(middle - centers[s]) - radii[s] + half)
+                else:
+                    outside = VecD()
+                    for k in range(D):
+                        outside[k] = wp.max(wp.max(lo[k] - centers[s][k], centers[s][k] - hi[k]), F(0.0))
+                    if wp.length(outside) - radii[s] <= bound:
+                        if found < out.shape[1]:
+                            out[row, found] = s
+                        found += 1
+            if listed:
+                s = level_next[s]
+            else:
+                s = nxt[s]
+    return bound, found
 
 
 @wp.kernel
-def near_bound_ids(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
-                   reach: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F), chunks: int,
-                   bound: wp.array(dtype=F)):
+def index_bound_ids(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
+                    reach: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
+                    origin: wp.array(dtype=F), top: F, heads: wp.array(dtype=wp.int32), nxt: wp.array(dtype=wp.int32),
+                    level_of: wp.array(dtype=wp.int32), level_head: wp.array(dtype=wp.int32),
+                    level_next: wp.array(dtype=wp.int32), level_count: wp.array(dtype=wp.int32),
+                    level_rmax: wp.array(dtype=F), scratch: wp.array2d(dtype=wp.int32), bound: wp.array(dtype=F)):
     """``bound[b]``: the reference's upper bound of the clearance in the cell of ``ids[b]``."""
-    t = wp.tid()
-    b = t // chunks
+    b = wp.tid()
     i = ids[b]
-    middle = F(0.5) * (lower[i] + upper[i])
-    half = F(0.5) * wp.length(upper[i] - lower[i])
-    size = (radii.shape[0] + chunks - 1) // chunks
-    best = reach[i]
-    for s in range((t % chunks) * size, wp.min((t % chunks + 1) * size, radii.shape[0])):
-        best = wp.min(best, wp.length(middle - centers[s]) - radii[s] + half)
-    wp.atomic_min(bound, b, best)
+    c, n = index_near(lower[i], upper[i], reach[i], 0, centers, radii, origin, top, heads, nxt, level_of, level_head,
+                      level_next, level_count, level_rmax, scratch, 0)
+    bound[b] = c
 
 
 @wp.kernel
-def near_fill_ids(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
-                  centers: wp.array(dtype=VecD), radii: wp.array(dtype=F), chunks: int, bound: wp.array(dtype=F),
-                  found: wp.array(dtype=wp.int32), out: wp.array2d(dtype=wp.int32)):
-    """Append the spheres of this chunk that come within ``bound[b]`` of the cell to row ``b``."""
-    t = wp.tid()
-    b = t // chunks
+def index_fill_ids(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
+                   bound: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
+                   origin: wp.array(dtype=F), top: F, heads: wp.array(dtype=wp.int32), nxt: wp.array(dtype=wp.int32),
+                   level_of: wp.array(dtype=wp.int32), level_head: wp.array(dtype=wp.int32),
+                   level_next: wp.array(dtype=wp.int32), level_count: wp.array(dtype=wp.int32),
+                   level_rmax: wp.array(dtype=F), found: wp.array(dtype=wp.int32), out: wp.array2d(dtype=wp.int32)):
+    """Row ``b``: the spheres that come within ``bound[b]`` of the cell of ``ids[b]``; ``found[b]`` their count."""
+    b = wp.tid()
     i = ids[b]
-    size = (radii.shape[0] + chunks - 1) // chunks
-    for s in range((t % chunks) * size, wp.min((t % chunks + 1) * size, radii.shape[0])):
-        if box_gap(i, s, lower, upper, centers, radii) <= bound[b]:
-            slot = wp.atomic_add(found, b, 1)
-            if slot < out.shape[1]:
-                out[b, slot] = s
+    c, n = index_near(lower[i], upper[i], bound[b], 1, centers, radii, origin, top, heads, nxt, level_of, level_head,
+                      level_next, level_count, level_rmax, out, b)
+    found[b] = n
+
+
+@wp.kernel
+def touched_index_select(points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
+                         polished: wp.array(dtype=wp.int32), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
+                         origin: wp.array(dtype=F), top: F, heads: wp.array(dtype=wp.int32),
+                         nxt: wp.array(dtype=wp.int32), level_of: wp.array(dtype=wp.int32),
+                         level_head: wp.array(dtype=wp.int32), level_next: wp.array(dtype=wp.int32),
+                         level_count: wp.array(dtype=wp.int32), level_rmax: wp.array(dtype=F),
+                         scratch: wp.array2d(dtype=wp.int32), counter: wp.array(dtype=wp.int32),
+                         out_ids: wp.array(dtype=wp.int32), out_values: wp.array(dtype=F),
+                         out_points: wp.array(dtype=VecD), out_flags: wp.array(dtype=wp.int32)):
+    """Append the prototypes whose clearance ball meets a new sphere (indexed in the arguments)."""
+    i = wp.tid()
+    c = clearance[i]
+    if c > F(-1.0e30):
+        tight, n = index_near(points[i], points[i], c, 0, centers, radii, origin, top, heads, nxt, level_of,
+                              level_head, level_next, level_count, level_rmax, scratch, 0)
+        if tight < c:
+            append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
 
 
 @wp.kernel
@@ -277,6 +381,18 @@ def near_finish(found: wp.array(dtype=wp.int32), sphere_count: int, width: wp.ar
 
 
 @wp.kernel
+def set_points(ids: wp.array(dtype=wp.int32), values: wp.array(dtype=VecD), out: wp.array(dtype=VecD)):
+    b = wp.tid()
+    out[ids[b]] = values[b]
+
+
+@wp.kernel
+def set_floats(ids: wp.array(dtype=wp.int32), values: wp.array(dtype=F), out: wp.array(dtype=F)):
+    b = wp.tid()
+    out[ids[b]] = values[b]
+
+
+@wp.kernel
 def move_ids(ids: wp.array(dtype=wp.int32), starts: wp.array2d(dtype=VecD), tries: int, points: wp.array(dtype=VecD),
              clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD),
              upper: wp.array(dtype=VecD), wall: wp.array(dtype=F), prm: wp.array(dtype=F),
@@ -288,10 +404,11 @@ def move_ids(ids: wp.array(dtype=wp.int32), starts: wp.array2d(dtype=VecD), trie
     i = ids[b]
     x = points[i]
     if tries > 0:
-        top, nearest = nearest_obstacle(x, prm, centers, radii, nbr, b, wall_floor(x, lower[i], upper[i], wall[i]))
+        top, nearest, feature = nearest_obstacle(x, prm, centers, radii, nbr, b,
+                                                 wall_floor(x, lower[i], upper[i], wall[i]))
         for t in range(tries):
             y = starts[t, b]
-            c, s = nearest_obstacle(y, prm, centers, radii, nbr, b, wall_floor(y, lower[i], upper[i], wall[i]))
+            c, s, f = nearest_obstacle(y, prm, centers, radii, nbr, b, wall_floor(y, lower[i], upper[i], wall[i]))
             if c > top:
                 top = c
                 x = y

@@ -43,7 +43,7 @@ def node_size(dim: int) -> int:
 
 def add_queries(program) -> str:
     """Add the surface queries of ``program.dim`` (2 or 3) to ``program``; returns the name of
-    :func:`surface_distance`."""
+    :func:`surface_distance` (:func:`add_gradient` adds the rest)."""
     if program.dim == 3:
         program.use(triangle_query, name="element_query")
         program.use(mesh_winding_number, name="inside_measure")
@@ -52,6 +52,18 @@ def add_queries(program) -> str:
         program.use(segment_query, name="element_query")
         program.use(outline_crossings, name="inside_measure")
     return program.use(surface_distance)
+
+
+def add_gradient(program, oracle, offset: int) -> None:
+    """Give ``oracle`` (a surface at ``offset``, its queries added) the closed-form gradient:
+    one tree walk finds the nearest element, which gives both the distance and its direction
+    (see :meth:`ndpack.kernels.program.Program.add_gradient`)."""
+    feature = program.define(f"def _(p, prm):\n    return {program.use(surface_feature)}(p, prm, {offset})\n")
+    at = program.define(
+        f"def _(p, prm, f: float):\n    return {program.use(surface_distance_at)}(p, prm, {offset}, f)\n")
+    slope = program.define(f"def _(p, prm, f: float, value: float, k: int):\n"
+                           f"    return {program.use(surface_slope)}(p, prm, {offset}, f, value, k)\n")
+    program.add_gradient(oracle, feature, at, slope)
 
 
 # [node box lower (D), upper (D)] at b: squared distance from q to the box (0 inside).
@@ -317,14 +329,24 @@ def outline_crossings(q, prm, o: int):
     return crossings % 2
 
 
-# The signed distance from p (user units) to the surface at o: negative inside.
-def surface_distance(p, prm, o: int):
+# The element of the surface at o nearest to p (user units), as a float: the feature that
+# surface_distance_at and surface_slope take (one tree walk serves the distance and its gradient).
+def surface_feature(p, prm, o: int):
     scale = prm[o + 2]
     q = point()
     for i in range(D):
         q[i] = (p[i] - prm[o + 3 + i]) / scale
-    k = int(nearest_element(q, prm, o, 1.0e30))
-    t = int(prm[o + 8]) + int(prm[o + 10]) * k
+    return float(nearest_element(q, prm, o, 1.0e30))
+
+
+# The signed distance from p (user units) to the surface at o, whose nearest element is f:
+# negative inside.
+def surface_distance_at(p, prm, o: int, f: float):
+    scale = prm[o + 2]
+    q = point()
+    for i in range(D):
+        q[i] = (p[i] - prm[o + 3 + i]) / scale
+    t = int(prm[o + 8]) + int(prm[o + 10]) * int(f)
     unsigned = math.sqrt(element_query(q, prm, t, 0)) * scale
     if prm[o + 1] == 0.0:
         if element_query(q, prm, t, 1) < 0.0:
@@ -333,3 +355,26 @@ def surface_distance(p, prm, o: int):
     if inside_measure(q, prm, o) > 0.5:
         return -unsigned
     return unsigned
+
+
+# The signed distance from p (user units) to the surface at o: negative inside.
+def surface_distance(p, prm, o: int):
+    return surface_distance_at(p, prm, o, surface_feature(p, prm, o))
+
+
+# Component k of the unit gradient of the signed distance at p, given p's nearest element f and
+# signed distance value: along p less its closest point (outside), the opposite way inside, and
+# the element's outward normal where p lies on the surface (the offset has no direction there).
+def surface_slope(p, prm, o: int, f: float, value: float, k: int):
+    scale = prm[o + 2]
+    t = int(prm[o + 8]) + int(prm[o + 10]) * int(f)
+    length = abs(value) / scale
+    if length <= 1.0e-12:
+        return prm[t + (9 if D == 3 else 4) + k]
+    q = point()
+    for i in range(D):
+        q[i] = (p[i] - prm[o + 3 + i]) / scale
+    offset = q[k] - element_query(q, prm, t, 2 + k)
+    if value < 0.0:
+        return -offset / length
+    return offset / length

@@ -188,7 +188,9 @@ class TriangleMesh(Oracle):
     def _kernel(self, program):
         offset = program.add_params(layout.relocate(self._block, program.next_offset))
         program.add_device_values(offset + kernels.MESH_ID, 4, self._warp_mesh_id)
-        return program.define(f"def _(p, prm):\n    return {kernels.add_queries(program)}(p, prm, {offset})\n")
+        distance = kernels.add_queries(program)
+        kernels.add_gradient(program, self, offset)
+        return program.define(f"def _(p, prm):\n    return {distance}(p, prm, {offset})\n")
 
     def _warp_mesh_id(self, device) -> np.ndarray:
         """The 16-bit pieces of the id of this mesh's ``wp.Mesh`` on ``device`` (built once, kept)."""

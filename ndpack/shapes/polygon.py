@@ -297,7 +297,9 @@ class Polygon(Oracle):
             block = self._outline_block = layout.pack_outline(
                 np.stack([self._start, self._end], axis=1), self._vertex_normals())
         offset = program.add_params(layout.relocate(block, program.next_offset))
-        return program.define(f"def _(p, prm):\n    return {kernels.add_queries(program)}(p, prm, {offset})\n")
+        distance = kernels.add_queries(program)
+        kernels.add_gradient(program, self, offset)
+        return program.define(f"def _(p, prm):\n    return {distance}(p, prm, {offset})\n")
 
     def _vertex_normals(self) -> np.ndarray:
         """(e, 2, 2): the pseudo-normals at each edge's start and end (sums of the two edge normals)."""
