@@ -49,6 +49,8 @@ TIME_BUDGET = None
 
 
 def timed_pack(shape, count, backend, **options):
+    if backend == "warp-float32":  # a label: Warp in float32 (its own wp.Mesh queries on meshes)
+        backend = nd.backends.get_backend("warp", precision="float32")
     started = time.perf_counter()
     nd.pack(shape, 3, backend=backend, **options)
     compile_s = time.perf_counter() - started
@@ -201,7 +203,7 @@ def voxel(args, backend):
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--cases", nargs="+", default=["armadillo", "cube", "square", "quality", "nd", "voxel"])
-    parser.add_argument("--backends", nargs="+", default=["numba"])
+    parser.add_argument("--backends", nargs="+", default=["numba"], help="names, or warp-float32")
     parser.add_argument("--mesh", default=str(MESH))
     parser.add_argument("--counts", nargs="+", type=int, default=[10_000, 100_000])
     parser.add_argument("--faithful-count", type=int, default=10_000)

@@ -165,7 +165,7 @@ class _ProtoSphere:
         cell_lower = lower + index * cell_size
         centres = cell_lower + cell_size / 2
         half_diagonal = 0.5 * float(np.linalg.norm(cell_size))
-        centre_distance = self.shape._distance(centres)
+        centre_distance = self._distance(centres)
         # The distance is 1-Lipschitz: a cell whose centre is farther out than half its
         # diagonal holds no interior point.
         keep = centre_distance < half_diagonal
@@ -196,6 +196,13 @@ class _ProtoSphere:
         # The fast mode's refinement keeps, per cell, its longest side and a clearance bound.
         self._longest = (cells["upper"] - cells["lower"]).max(axis=1)
         self._bound = cells["reach"].copy()
+
+    def _distance(self, points):
+        """The shape's signed distance at ``points`` (k, d): (k,) float64, on the backend where it
+        computes in float64 (a GPU evaluates a mesh's many times faster than the host)."""
+        if getattr(self.backend, "precision", "float64") == "float64":
+            return self.backend.distance(self.shape, points)
+        return self.shape._distance(points)
 
     @property
     def cell_lower(self):
@@ -348,7 +355,7 @@ class _ProtoSphere:
         other_upper[rows, axis] = np.where(low_half, upper[rows, axis], middle)
         new_lower, new_upper = np.concatenate([kept_lower, other_lower]), np.concatenate([kept_upper, other_upper])
         centres = 0.5 * (new_lower + new_upper)
-        centre_distance = self.shape._distance(centres)
+        centre_distance = self._distance(centres)
         half_diagonal = 0.5 * np.linalg.norm(new_upper - new_lower, axis=1)
         reach = np.minimum(np.tile(store.reach[ids], 2), -centre_distance + half_diagonal)
         wall = -centre_distance - WALL_SLACK * self.margin

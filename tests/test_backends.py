@@ -282,9 +282,10 @@ def test_small_device_store_round_trips_few_prototypes(name, monkeypatch):
     packing = nd.pack(nd.Box([0.0, 0.0], [1.0, 1.0]), 30, grid=32, backend=name)
     assert packing.verify().ok and len(stores) == 1
     rounds, prototypes = len(packing.stats.time), len(stores[0])
-    # Large copies: the medial axis at the start, and the prototypes the first sphere touched.
+    # Large copies: the medial axis at the start, and the prototypes the first sphere touched
+    # (their ids and points, then their tightened reach once they moved).
     large = [size for size in sizes if size > prototypes / 4]
-    assert len(large) <= 3, large
+    assert len(large) <= 4, large
     # Every other round copies a few percent of the prototypes (those a new sphere touched).
     assert sum(sizes) - sum(large) < 0.1 * rounds * prototypes, (sizes, rounds, prototypes)
 

@@ -181,7 +181,7 @@ def test_device_index_finds_what_the_reference_finds(name, precision):
         pytest.importorskip("warp")
         from ndpack.backends.warp_backend import WarpBackend
 
-        backend = WarpBackend(device="cpu", precision=precision)
+        backend = WarpBackend(precision=precision)
     else:
         backend = nd.backends.get_backend(name)
     rng = np.random.default_rng(7)

@@ -32,6 +32,7 @@ class DeviceSpheres:
         self.first = self.last = None
         self.centers = self.radii = None
         self.dim = None
+        self._views = (None, None, None)  # (count, centers, radii): views cost tens of us in numba-cuda
 
     def sync(self, centers: np.ndarray, radii: np.ndarray):
         """Device views equal to ``centers`` (m, d) float64 and ``radii`` (m,) float64."""
@@ -49,12 +50,15 @@ class DeviceSpheres:
             if self.count:
                 self.keep(new_centers, new_radii, self.centers, self.radii, self.count)
             self.centers, self.radii, self.dim = new_centers, new_radii, dim
+            self._views = (None, None, None)
         if count > self.count:
             self.write(self.centers, self.radii, self.count,
                        np.ascontiguousarray(centers[self.count :]), np.ascontiguousarray(radii[self.count :]))
             self.count = count
             self.first, self.last = centers[0].copy(), centers[count - 1].copy()
-        return self.view(self.centers, count), self.view(self.radii, count)
+        if self._views[0] != count:
+            self._views = (count, self.view(self.centers, count), self.view(self.radii, count))
+        return self._views[1:]
 
     @property
     def capacity(self) -> int:
