@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import itertools
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -93,25 +95,27 @@ def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0):
         members = np.flatnonzero(octave == level)
         tree = cKDTree(centers[members])
         largest = radii[members].max()
-        # Each pair is found from the larger sphere's side, querying the smaller one's octave.
+        # Each pair is found once from the larger sphere's side, querying the smaller one's
+        # octave; a pair within one octave is found from both sides (and each sphere finds
+        # itself), so there only the lower id's side counts.
         queries = np.flatnonzero(octave >= level)
         found = tree.query_ball_point(
-            centers[queries], radii[queries] + largest + tol, return_sorted=False
+            centers[queries], radii[queries] + largest + tol, return_sorted=False, workers=-1
         )
-        lengths = np.fromiter((len(hits) for hits in found), dtype=np.int64, count=len(found))
-        if lengths.sum() == 0:
-            continue
-        firsts.append(np.repeat(queries, lengths))
-        seconds.append(members[np.concatenate([np.asarray(h, dtype=np.int64) for h in found])])
-    if not firsts:
+        lengths = np.fromiter(map(len, found), dtype=np.int64, count=len(found))
+        # One flat pass over the lists: several times faster than an array per list.
+        second = members[np.fromiter(itertools.chain.from_iterable(found), dtype=np.int64, count=int(lengths.sum()))]
+        first = np.repeat(queries, lengths)
+        once = (octave[first] > level) | (first < second)
+        firsts.append(first[once])
+        seconds.append(second[once])
+    first, second = np.concatenate(firsts), np.concatenate(seconds)
+    if len(first) == 0:
         return np.zeros((0, 2), dtype=np.int64), -np.inf
-    pairs = np.stack([np.concatenate(firsts), np.concatenate(seconds)], axis=1)
-    pairs = np.unique(np.sort(pairs[pairs[:, 0] != pairs[:, 1]], axis=1), axis=0)
-    if len(pairs) == 0:
-        return pairs, -np.inf
-    gaps = np.linalg.norm(centers[pairs[:, 0]] - centers[pairs[:, 1]], axis=1)
-    overlap = radii[pairs[:, 0]] + radii[pairs[:, 1]] - gaps
-    return pairs[overlap > tol], float(overlap.max())
+    overlap = radii[first] + radii[second] - np.linalg.norm(centers[first] - centers[second], axis=1)
+    bad = overlap > tol
+    pairs = np.sort(np.stack([first[bad], second[bad]], axis=1), axis=1)
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))], float(overlap.max())
 
 
 def verify(packing, shape=None, tol: float | None = None, radii=None) -> Verification:
