@@ -263,11 +263,7 @@ def index_bucket(level, cell, mask):
     """Hash bucket of grid cell ``cell`` (whole numbers as floats) of ``level``."""
     key = level + 1
     for k in range(D):
-        # A float beyond int64 (or NaN) converts to an undefined value, which a GPU compiler may
-        # carry into the bucket's address: clamp far beyond any real cell (about 2**47 times the
-        # shape over its largest radius) so that every input hashes to a bucket.
-        c = cell[k] if cell[k] > -4e18 else -4e18
-        key = key * 1000003 + int(min(c, 4e18))  # int64 wraps, which is fine for a hash
+        key = key * 1000003 + int(cell[k])  # int64 wraps, which is fine for a hash
     key = key ^ (key >> 29)
     return key & mask
 

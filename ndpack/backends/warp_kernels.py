@@ -239,10 +239,7 @@ def index_bucket(level: int, cell: VecD, mask: int):
     (the same bits as their wrapping int64 one wherever the mask reaches)."""
     key = wp.uint64(level + 1)
     for k in range(D):
-        c = F(-4.0e18)  # clamped as the Numba kernels do (NaN too): every input hashes to a bucket
-        if cell[k] > F(-4.0e18):
-            c = wp.min(cell[k], F(4.0e18))
-        key = key * wp.uint64(1000003) + wp.uint64(wp.int64(c))
+        key = key * wp.uint64(1000003) + wp.uint64(wp.int64(cell[k]))
     key = key ^ (key >> wp.uint64(29))
     return int(key & wp.uint64(mask))
 
