@@ -337,3 +337,58 @@ def test_use_binds_a_function_under_another_name():
         kernels.add_queries(program)
         text = program.source("numba")
         assert "def element_query(" in text and f"def {element}(" not in text
+
+
+_GRADIENT_LOOP = '''
+def gradient_all(points, prm, out_feature, out_distance, out_gradient):
+    for i in range(points.shape[0]):
+        f = sd_feature(points[i], prm)
+        out_feature[i] = f
+        out_distance[i] = sd_at(points[i], prm, f)
+        for k in range(D):
+            out_gradient[i, k] = sd_slope(points[i], prm, f, out_distance[i], k)
+'''
+
+
+def _compiled_gradient(shape, points):
+    """The module's gradient entries (sd_feature, sd_at, sd_slope) run by Numba at ``points``."""
+    import numba
+
+    from ndpack.backends.base import compiled_program
+    from ndpack.kernels.compile import numba_namespace
+
+    def jit(namespace, names):
+        for name in names:
+            namespace[name] = numba.njit(namespace[name])
+
+    program, params = compiled_program(shape)
+    namespace = numba_namespace(program, "cpu", _GRADIENT_LOOP, {}, jit)
+    count = len(points)
+    feature, distance, gradient = np.empty(count), np.empty(count), np.empty((count, shape.dim))
+    namespace["gradient_all"](np.ascontiguousarray(points, dtype=np.float64), params, feature, distance, gradient)
+    return feature, distance, gradient
+
+
+def test_mesh_and_outline_gradients_come_from_the_nearest_element():
+    """A mesh's and an outline's compiled gradient (one tree walk) equals the NumPy oracle's
+    nearest-point gradient, and the distance given the feature equals ``sd``; other shapes say
+    they have none (feature -1) and keep central differences."""
+    import trimesh
+
+    rng = np.random.default_rng(3)
+    mesh = nd.TriangleMesh.from_trimesh(trimesh.creation.icosphere(subdivisions=2))
+    outline = nd.Polygon([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 0.4], [0.0, 1.0]])
+    for shape in (mesh, outline):
+        lower, upper = shape.bounds
+        points = lower + (upper - lower) * rng.random((500, shape.dim))
+        feature, distance, gradient = _compiled_gradient(shape, points)
+        expected_distance, expected_gradient = shape.distance_and_gradient(points)
+        assert np.all(feature >= 0)
+        np.testing.assert_array_equal(distance, numba_evaluator(build(shape))(points, build(shape).param_array()))
+        np.testing.assert_allclose(distance, expected_distance, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(gradient, expected_gradient, rtol=0, atol=1e-9)
+    box = nd.Box(np.zeros(3), np.ones(3))
+    points = rng.random((10, 3))
+    feature, distance, gradient = _compiled_gradient(box, points)
+    assert np.all(feature == -1) and np.all(gradient == 0)
+    np.testing.assert_allclose(distance, box.distance(points), rtol=0, atol=1e-12)
