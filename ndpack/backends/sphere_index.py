@@ -47,7 +47,6 @@ class SphereIndex:
         # The coarsest cells are four times the largest radius seen so far; later larger spheres
         # still go to level 0, whose largest radius every query allows for.
         top = 4.0 * float(radii.max()) if len(radii) and radii.max() > 0 else 1.0
-        self.top = top
         self.arrays = (
             np.zeros(dim),                          # origin
             top,                                    # top
