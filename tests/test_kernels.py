@@ -340,9 +340,12 @@ def test_use_binds_a_function_under_another_name():
 
 
 _GRADIENT_LOOP = '''
-def gradient_all(points, prm, out_feature, out_distance, out_gradient):
+def gradient_all(points, prm, hint, bound, out_feature, out_distance, out_gradient):
     for i in range(points.shape[0]):
-        f = sd_feature(points[i], prm)
+        f = sd_feature(points[i], prm, hint[i], bound[i])
+        out_feature[i] = f
+        if f == -2.0:  # none within the bound
+            continue
         out_feature[i] = f
         out_distance[i] = sd_at(points[i], prm, f)
         for k in range(D):
@@ -350,8 +353,9 @@ def gradient_all(points, prm, out_feature, out_distance, out_gradient):
 '''
 
 
-def _compiled_gradient(shape, points):
-    """The module's gradient entries (sd_feature, sd_at, sd_slope) run by Numba at ``points``."""
+def _compiled_gradient(shape, points, hint=None, bound=None):
+    """The module's gradient entries (sd_feature, sd_at, sd_slope) run by Numba at ``points``,
+    the search given ``hint`` and ``bound`` (k,) (default: none, -1 and 1e30)."""
     import numba
 
     from ndpack.backends.base import compiled_program
@@ -365,7 +369,10 @@ def _compiled_gradient(shape, points):
     namespace = numba_namespace(program, "cpu", _GRADIENT_LOOP, {}, jit)
     count = len(points)
     feature, distance, gradient = np.empty(count), np.empty(count), np.empty((count, shape.dim))
-    namespace["gradient_all"](np.ascontiguousarray(points, dtype=np.float64), params, feature, distance, gradient)
+    hint = np.full(count, -1.0) if hint is None else np.asarray(hint, dtype=np.float64)
+    bound = np.full(count, 1e30) if bound is None else np.asarray(bound, dtype=np.float64)
+    namespace["gradient_all"](np.ascontiguousarray(points, dtype=np.float64), params, hint, bound, feature, distance,
+                              gradient)
     return feature, distance, gradient
 
 
@@ -392,3 +399,34 @@ def test_mesh_and_outline_gradients_come_from_the_nearest_element():
     feature, distance, gradient = _compiled_gradient(box, points)
     assert np.all(feature == -1) and np.all(gradient == 0)
     np.testing.assert_allclose(distance, box.distance(points), rtol=0, atol=1e-12)
+
+
+def test_the_nearest_feature_search_given_a_hint_or_a_bound_finds_the_same_feature():
+    """The search's pruning changes nothing it finds: from any hint the nearest feature is the
+    unhinted one; with a bound, a closed surface reports -2 exactly where the boundary lies
+    farther than the bound, and the same feature elsewhere. A mesh signed by winding numbers
+    (not closed) has no such guarantee and ignores the bound."""
+    import trimesh
+
+    rng = np.random.default_rng(5)
+    closed = nd.TriangleMesh.from_trimesh(trimesh.creation.icosphere(subdivisions=2))
+    outline = nd.Polygon([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 0.4], [0.0, 1.0]])
+    sphere = trimesh.creation.icosphere(subdivisions=2)
+    open_mesh = nd.TriangleMesh(sphere.vertices, sphere.faces[1:], sign="winding")  # not closed
+    for shape in (closed, outline, open_mesh):
+        lower, upper = shape.bounds
+        points = lower + (upper - lower) * rng.random((400, shape.dim))
+        unhinted = _compiled_gradient(shape, points)[0]
+        elements = int(unhinted.max()) + 1
+        hinted = _compiled_gradient(shape, points, hint=rng.integers(0, elements, len(points)))[0]
+        np.testing.assert_array_equal(hinted, unhinted)
+        unsigned = np.abs(shape.distance(points))
+        bound = unsigned * rng.choice([0.5, 0.999, 1.001, 2.0], len(points))
+        bounded = _compiled_gradient(shape, points, bound=bound)[0]
+        if shape is open_mesh:
+            np.testing.assert_array_equal(bounded, unhinted)
+            continue
+        farther = unsigned > bound
+        assert 0 < farther.sum() < len(points)
+        assert np.all(bounded[farther] == -2)
+        np.testing.assert_array_equal(bounded[~farther], unhinted[~farther])

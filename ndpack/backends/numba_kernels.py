@@ -13,14 +13,17 @@ Array arguments: ``points``, ``lower``, ``upper``, ``centers`` (n, D) float64; `
 # ruff: noqa: F821  (D, H, sd, sd_feature, sd_at, sd_slope and point exist where this text runs)
 
 
-def nearest_obstacle(x, prm, centers, radii, nbr, row, floor):
-    """Clearance of ``x``, its nearest sphere (-1 when the shape's boundary is nearest), the
-    boundary's distance where it was evaluated (-inf where not), and the boundary's nearest
-    feature there (``sd_feature``; -1 where not evaluated or where the shape has none).
+def nearest_obstacle(x, prm, centers, radii, nbr, row, floor, hint):
+    """Clearance of ``x``, its nearest sphere (-1 when the shape's boundary is nearest), a lower
+    bound of the boundary's distance (exact where it was evaluated, -inf where nothing is known),
+    and the boundary's nearest feature there (``sd_feature``; -1 where not evaluated or where the
+    shape has none, -2 where only known farther than the nearest sphere).
 
     ``floor`` is a lower bound of the boundary's distance at ``x`` (from the cell's wall, see
     :func:`wall_floor`): a sphere nearer than that is nearest without evaluating the shape, which
-    spares the (mesh) distance deep inside. The result is the same as evaluating it.
+    spares the (mesh) distance deep inside. Where it is evaluated, the search for the nearest
+    feature starts from ``hint`` (a feature found nearby, or -1) and looks no farther than the
+    nearest sphere. The result is the same as evaluating it in full.
     The row ``nbr[row]`` may list the spheres in any order: ties resolve by sphere id.
     """
     gap_min = math.inf
@@ -42,7 +45,9 @@ def nearest_obstacle(x, prm, centers, radii, nbr, row, floor):
             nearest = s
     if nearest >= 0 and gap_min < floor:
         return gap_min, nearest, -math.inf, -1.0
-    feature = sd_feature(x, prm)
+    feature = sd_feature(x, prm, hint, gap_min)
+    if feature == -2.0:  # no boundary as near as the sphere: the sphere wins
+        return gap_min, nearest, gap_min, feature
     boundary = -sd_at(x, prm, feature)
     if gap_min < boundary:  # the boundary wins over an equal sphere
         return gap_min, nearest, boundary, feature
@@ -59,15 +64,16 @@ def wall_floor(x, lower, upper, wall, cell):
     return wall[cell] - math.sqrt(length2)
 
 
-def free_space(x, g, prm, centers, radii, nbr, row, floor):
-    """Clearance of ``x`` and the boundary's distance where it was evaluated (-inf where not);
-    in ``g``, the direction away from the nearest obstacle.
+def free_space(x, g, prm, centers, radii, nbr, row, floor, hint):
+    """Clearance of ``x``, a lower bound of the boundary's distance and the boundary's nearest
+    feature (see :func:`nearest_obstacle`, which ``floor`` and ``hint`` are for); in ``g``, the
+    direction away from the nearest obstacle.
 
     Away from the shape's boundary it is ``-grad sd``: closed-form from the nearest feature where
     the shape has one (meshes, outlines), else by central differences of step ``H`` (the
     reference uses the analytic gradient); away from a sphere, the unit vector from its centre.
     """
-    clearance, nearest, boundary, feature = nearest_obstacle(x, prm, centers, radii, nbr, row, floor)
+    clearance, nearest, boundary, feature = nearest_obstacle(x, prm, centers, radii, nbr, row, floor, hint)
     if nearest < 0 and feature >= 0.0:
         for k in range(D):
             g[k] = -sd_slope(x, prm, feature, -boundary, k)
@@ -91,7 +97,7 @@ def free_space(x, g, prm, centers, radii, nbr, row, floor):
                 g[k] = g[k] / length
             else:  # exactly at a centre: any way out will do, take axis 0 as the reference does
                 g[k] = 1.0 if k == 0 else 0.0
-    return clearance, boundary
+    return clearance, boundary, feature
 
 
 def clearance_one(i, points, prm, centers, radii, nbr, out, out_direction):
@@ -100,7 +106,7 @@ def clearance_one(i, points, prm, centers, radii, nbr, out, out_direction):
     g = point()
     for k in range(D):
         x[k] = points[i, k]
-    out[i] = free_space(x, g, prm, centers, radii, nbr, i, -math.inf)[0]
+    out[i] = free_space(x, g, prm, centers, radii, nbr, i, -math.inf, -1.0)[0]
     if out_direction.shape[0] > i:
         for k in range(D):
             out_direction[i, k] = g[k]
@@ -125,11 +131,11 @@ def best_start(x, g, starts, tries, cell, row, lower, upper, wall, prm, centers,
     """Replace ``x`` by the first of ``starts[:tries, row]`` with a larger clearance, if any
     (``g`` is scratch): the reference's best of a prototype's point and its restarts."""
     if tries > 0:
-        top = nearest_obstacle(x, prm, centers, radii, nbr, row, wall_floor(x, lower, upper, wall, cell))[0]
+        top = nearest_obstacle(x, prm, centers, radii, nbr, row, wall_floor(x, lower, upper, wall, cell), -1.0)[0]
         for t in range(tries):
             for k in range(D):
                 g[k] = starts[t, row, k]
-            c = nearest_obstacle(g, prm, centers, radii, nbr, row, wall_floor(g, lower, upper, wall, cell))[0]
+            c = nearest_obstacle(g, prm, centers, radii, nbr, row, wall_floor(g, lower, upper, wall, cell), -1.0)[0]
             if c > top:
                 top = c
                 for k in range(D):
@@ -140,12 +146,14 @@ def converge_from(x, g, best, cell, row, lower, upper, wall, prm, centers, radii
     """``p <- p + eps |c| g`` from ``x``, clipped to cell ``cell``, with neighbour row ``row``.
 
     Leaves the best point seen in ``best`` (as the reference does) and returns its clearance;
-    ``x`` and ``g`` are scratch. The boundary's distance last evaluated, at ``anchor``, bounds it
-    nearby (1-Lipschitz) better than the cell's wall: steps are small, so most evaluations deep
-    in the packing are spared.
+    ``x`` and ``g`` are scratch. The boundary's distance last bounded from below, at ``anchor``,
+    bounds it nearby (1-Lipschitz) better than the cell's wall: steps are small, so most
+    evaluations deep in the packing are spared. The last nearest feature found is the next
+    search's hint.
     """
     anchor = point()
     anchored = -math.inf
+    hint = -1.0
     for k in range(D):
         best[k] = x[k]
         anchor[k] = x[k]
@@ -156,7 +164,9 @@ def converge_from(x, g, best, cell, row, lower, upper, wall, prm, centers, radii
         for k in range(D):
             length2 += (x[k] - anchor[k]) ** 2
         floor = max(wall_floor(x, lower, upper, wall, cell), anchored - math.sqrt(length2) - 1e-3 * H)
-        c, boundary = free_space(x, g, prm, centers, radii, nbr, row, floor)
+        c, boundary, feature = free_space(x, g, prm, centers, radii, nbr, row, floor, hint)
+        if feature >= 0.0:
+            hint = feature
         if boundary > -math.inf:
             anchored = boundary
             for k in range(D):

@@ -11,12 +11,16 @@ and ``sd(p, prm)``. Every kernel mirrors a step of the NumPy reference
 
 @wp.func
 def nearest_obstacle(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
-                     nbr: wp.array2d(dtype=wp.int32), row: int, floor: F):
-    """Clearance of ``x``, its nearest sphere (-1 when the shape's boundary is nearest), and the
-    boundary's nearest feature (-1 where not evaluated, or where the shape has none).
+                     nbr: wp.array2d(dtype=wp.int32), row: int, floor: F, hint: F):
+    """Clearance of ``x``, its nearest sphere (-1 when the shape's boundary is nearest), a lower
+    bound of the boundary's distance (exact where evaluated, -1e30 where nothing is known), and
+    the boundary's nearest feature (-1 where not evaluated or where the shape has none, -2 where
+    only known farther than the nearest sphere).
 
     A sphere nearer than ``floor``, a lower bound of the boundary's distance, is nearest without
-    evaluating the shape (see the Numba kernels). Ties resolve by sphere id, whatever the row's order.
+    evaluating the shape; the search for the nearest feature starts from ``hint`` and looks no
+    farther than the nearest sphere (see the Numba kernels). Ties resolve by sphere id, whatever
+    the row's order.
     """
     gap_min = F(1.0e30)
     nearest = int(-1)
@@ -30,12 +34,14 @@ def nearest_obstacle(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=Ve
             gap_min = gap
             nearest = s
     if nearest >= 0 and gap_min < floor:
-        return gap_min, nearest, F(-1.0)
-    feature = sd_feature(x, prm)
+        return gap_min, nearest, F(-1.0e30), F(-1.0)
+    feature = sd_feature(x, prm, hint, gap_min)
+    if feature == F(-2.0):  # no boundary as near as the sphere: the sphere wins
+        return gap_min, nearest, gap_min, feature
     boundary = -sd_at(x, prm, feature)
     if gap_min < boundary:  # the boundary wins over an equal sphere
-        return gap_min, nearest, feature
-    return boundary, int(-1), feature
+        return gap_min, nearest, boundary, feature
+    return boundary, int(-1), boundary, feature
 
 
 @wp.func
@@ -46,11 +52,12 @@ def wall_floor(x: VecD, lower: VecD, upper: VecD, wall: F):
 
 @wp.func
 def free_space(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
-               nbr: wp.array2d(dtype=wp.int32), row: int, h: F, floor: F):
-    """Clearance of ``x`` and the direction away from its nearest obstacle (``-grad sd``,
+               nbr: wp.array2d(dtype=wp.int32), row: int, h: F, floor: F, hint: F):
+    """Clearance of ``x``, the direction away from its nearest obstacle (``-grad sd``,
     closed-form from the nearest feature where the shape has one, else by central differences of
-    step ``h``; or away from the nearest sphere's centre)."""
-    clearance, nearest, feature = nearest_obstacle(x, prm, centers, radii, nbr, row, floor)
+    step ``h``; or away from the nearest sphere's centre), and ``nearest_obstacle``'s bound of
+    the boundary's distance and feature."""
+    clearance, nearest, bound, feature = nearest_obstacle(x, prm, centers, radii, nbr, row, floor, hint)
     g = VecD()
     if nearest < 0 and feature >= F(0.0):
         for k in range(D):
@@ -70,7 +77,7 @@ def free_space(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), r
             g = away / length
         else:
             g[0] = F(1.0)
-    return clearance, g
+    return clearance, g, bound, feature
 
 
 @wp.kernel
@@ -84,7 +91,7 @@ def clearance_all(points: wp.array(dtype=VecD), prm: wp.array(dtype=F), centers:
                   radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32), h: F, out: wp.array(dtype=F),
                   out_direction: wp.array(dtype=VecD)):
     i = wp.tid()
-    c, g = free_space(points[i], prm, centers, radii, nbr, i, h, F(-1.0e30))
+    c, g, bound, feature = free_space(points[i], prm, centers, radii, nbr, i, h, F(-1.0e30), F(-1.0))
     out[i] = c
     if out_direction.shape[0] > i:
         out_direction[i] = g
@@ -94,12 +101,23 @@ def clearance_all(points: wp.array(dtype=VecD), prm: wp.array(dtype=F), centers:
 def converge_from(x: VecD, lower: VecD, upper: VecD, wall: F, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD),
                   radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32), row: int, steps: wp.array(dtype=F),
                   h: F):
-    """``p <- p + eps |c| g`` from ``x``, clipped to the cell; the best point seen and its clearance."""
+    """``p <- p + eps |c| g`` from ``x``, clipped to the cell; the best point seen and its clearance.
+    The last lower bound of the boundary's distance, at ``anchor``, spares evaluations nearby,
+    and the last nearest feature is the next search's hint (see the Numba kernels)."""
     best = x
     best_clearance = F(-1.0e30)
+    anchor = x
+    anchored = F(-1.0e30)
+    hint = F(-1.0)
     count = steps.shape[0]
     for t in range(count + 1):
-        c, g = free_space(x, prm, centers, radii, nbr, row, h, wall_floor(x, lower, upper, wall))
+        floor = wp.max(wall_floor(x, lower, upper, wall), anchored - wp.length(x - anchor) - F(1.0e-3) * h)
+        c, g, bound, feature = free_space(x, prm, centers, radii, nbr, row, h, floor, hint)
+        if feature >= F(0.0):
+            hint = feature
+        if bound > F(-1.0e30):
+            anchored = bound
+            anchor = x
         if c > best_clearance:
             best_clearance = c
             best = x
@@ -404,11 +422,12 @@ def move_ids(ids: wp.array(dtype=wp.int32), starts: wp.array2d(dtype=VecD), trie
     i = ids[b]
     x = points[i]
     if tries > 0:
-        top, nearest, feature = nearest_obstacle(x, prm, centers, radii, nbr, b,
-                                                 wall_floor(x, lower[i], upper[i], wall[i]))
+        top, nearest, bound, feature = nearest_obstacle(x, prm, centers, radii, nbr, b,
+                                                        wall_floor(x, lower[i], upper[i], wall[i]), F(-1.0))
         for t in range(tries):
             y = starts[t, b]
-            c, s, f = nearest_obstacle(y, prm, centers, radii, nbr, b, wall_floor(y, lower[i], upper[i], wall[i]))
+            c, s, bound, f = nearest_obstacle(y, prm, centers, radii, nbr, b,
+                                              wall_floor(y, lower[i], upper[i], wall[i]), F(-1.0))
             if c > top:
                 top = c
                 x = y

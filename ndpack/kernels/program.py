@@ -22,11 +22,11 @@ from .language import Kernel
 #: Name of the entry function every compiled module exposes.
 ENTRY = "sd"
 #: The gradient entries every compiled module exposes too (see :meth:`Program.add_gradient`):
-#: ``sd_feature(p, prm)``, ``sd_at(p, prm, f)`` and ``sd_slope(p, prm, f, value, k)``.
+#: ``sd_feature(p, prm, hint, bound)``, ``sd_at(p, prm, f)`` and ``sd_slope(p, prm, f, value, k)``.
 FEATURE, AT_FEATURE, SLOPE = "sd_feature", "sd_at", "sd_slope"
 #: What they are for a shape with no closed-form gradient: no feature (-1), so the backends take
 #: central differences of ``sd``; the compilers fold the constant away.
-_NO_GRADIENT = f"""def {FEATURE}(p, prm):
+_NO_GRADIENT = f"""def {FEATURE}(p, prm, hint: float, bound: float):
     return -1.0
 
 
@@ -109,10 +109,13 @@ class Program:
 
     def add_gradient(self, oracle, feature: str, at: str, slope: str) -> None:
         """Record that ``oracle``'s distance has a closed-form gradient, in three functions:
-        ``feature(p, prm)`` a number naming the boundary feature nearest to ``p`` (>= 0; the
-        expensive search), ``at(p, prm, f)`` the signed distance given it (equal to the distance
-        function's), and ``slope(p, prm, f, value, k)`` component ``k`` of the unit gradient
-        given it and that distance. A top-level shape's become the module's gradient entries:
+        ``feature(p, prm, hint, bound)`` a number naming the boundary feature nearest to ``p``
+        (>= 0; the expensive search, which ``hint``, a feature found near ``p`` before or -1,
+        may speed up; -2 where no feature is nearer than ``bound``, which only a closed surface
+        may report, see :func:`ndpack.meshes.kernels.surface_feature`), ``at(p, prm, f)`` the
+        signed distance given it (equal to the distance function's), and
+        ``slope(p, prm, f, value, k)`` component ``k`` of the unit gradient given it and that
+        distance. A top-level shape's become the module's gradient entries:
         the backends then move a prototype by one search a step instead of ``2 D + 1`` distances.
         """
         self._gradients[id(oracle)] = (feature, at, slope)
@@ -195,7 +198,8 @@ def _add_gradient_entries(program: Program, gradient) -> None:
         source = _NO_GRADIENT
     else:
         feature, at, slope = gradient
-        source = (f"def {FEATURE}(p, prm):\n    return {feature}(p, prm)\n\n\n"
+        source = (f"def {FEATURE}(p, prm, hint: float, bound: float):\n"
+                  f"    return {feature}(p, prm, hint, bound)\n\n\n"
                   f"def {AT_FEATURE}(p, prm, f: float):\n    return {at}(p, prm, f)\n\n\n"
                   f"def {SLOPE}(p, prm, f: float, value: float, k: int):\n    return {slope}(p, prm, f, value, k)\n")
     for text in source.split("\n\n\n"):

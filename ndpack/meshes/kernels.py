@@ -58,7 +58,8 @@ def add_gradient(program, oracle, offset: int) -> None:
     """Give ``oracle`` (a surface at ``offset``, its queries added) the closed-form gradient:
     one tree walk finds the nearest element, which gives both the distance and its direction
     (see :meth:`ndpack.kernels.program.Program.add_gradient`)."""
-    feature = program.define(f"def _(p, prm):\n    return {program.use(surface_feature)}(p, prm, {offset})\n")
+    feature = program.define(f"def _(p, prm, hint: float, bound: float):\n"
+                             f"    return {program.use(surface_feature)}(p, prm, {offset}, hint, bound)\n")
     at = program.define(
         f"def _(p, prm, f: float):\n    return {program.use(surface_distance_at)}(p, prm, {offset}, f)\n")
     slope = program.define(f"def _(p, prm, f: float, value: float, k: int):\n"
@@ -331,12 +332,29 @@ def outline_crossings(q, prm, o: int):
 
 # The element of the surface at o nearest to p (user units), as a float: the feature that
 # surface_distance_at and surface_slope take (one tree walk serves the distance and its gradient).
-def surface_feature(p, prm, o: int):
+# Two bounds prune the walk without changing its answer. ``hint`` (>= 0), an element found near p
+# before (the last step's): the nearest is no farther than it. ``bound``: only an element nearer
+# than that matters (-2 when there is none); on a closed surface (pseudo-normal or crossing sign)
+# a caller that has an inserted sphere ``bound`` away knows then that p lies inside, farther than
+# ``bound`` from the boundary (the way to the sphere would cross the surface otherwise). Winding
+# numbers have no such guarantee across holes, so they ignore ``bound``. Both limits are widened
+# by a relative slack above any rounding, so an element at exactly the limit is still found.
+def surface_feature(p, prm, o: int, hint: float, bound: float):
     scale = prm[o + 2]
     q = point()
     for i in range(D):
         q[i] = (p[i] - prm[o + 3 + i]) / scale
-    return float(nearest_element(q, prm, o, 1.0e30))
+    limit = 1.0e30
+    if bound < 1.0e30 and prm[o + 1] != 1.0:
+        b = max(bound, 0.0) / scale
+        limit = b * b * 1.000001 + 1.0e-30
+    if hint >= 0.0:
+        d = element_query(q, prm, int(prm[o + 8]) + int(prm[o + 10]) * int(hint), 0)
+        limit = min(limit, d * 1.000001 + 1.0e-30)
+    found = nearest_element(q, prm, o, limit)
+    if found < 0:
+        return -2.0
+    return float(found)
 
 
 # The signed distance from p (user units) to the surface at o, whose nearest element is f:
@@ -359,7 +377,7 @@ def surface_distance_at(p, prm, o: int, f: float):
 
 # The signed distance from p (user units) to the surface at o: negative inside.
 def surface_distance(p, prm, o: int):
-    return surface_distance_at(p, prm, o, surface_feature(p, prm, o))
+    return surface_distance_at(p, prm, o, surface_feature(p, prm, o, -1.0, 1.0e30))
 
 
 # Component k of the unit gradient of the signed distance at p, given p's nearest element f and

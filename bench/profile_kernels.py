@@ -1,0 +1,136 @@
+"""Where a fast-mode packing's time goes, by device kernel and by driver phase.
+
+    python bench/profile_kernels.py --backends warp numba-cuda --count 100000 [--mesh armadillo.obj]
+
+Every kernel launch of the device store is made synchronous and timed (so its time is the
+device's, launch included, and copies queued before it are timed apart as ``(copies before)``);
+the cell-centre distances are timed the same way. The driver's phases are timed inclusively
+(``refine`` contains ``_split``, which contains ``reconverge``). Synchronising every launch
+slows the run down: the total is not the unprofiled time. Compiles first (a 3-sphere packing).
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import functools
+import json
+import time
+
+import numpy as np
+
+import ndpack as nd
+from ndpack import protosphere
+
+#: Driver phases timed inclusively: (owner, attribute name).
+PHASES = [
+    (protosphere._ProtoSphere, "choose_window"),
+    (protosphere._ProtoSphere, "reconverge"),
+    (protosphere._ProtoSphere, "refine"),
+    (protosphere._ProtoSphere, "_split"),
+    (protosphere._ProtoSphere, "_distance"),
+    (protosphere._ProtoSphere, "insert"),
+    (protosphere._ProtoSphere, "revive"),
+    (protosphere, "nearest_sphere"),
+    (protosphere, "disjoint_greedy"),
+]
+
+
+class Recorder:
+    def __init__(self):
+        self.kernels = collections.defaultdict(lambda: [0, 0.0, 0, 0])  # calls, seconds, threads, max threads
+        self.phases = collections.defaultdict(lambda: [0, 0.0])
+
+    def kernel(self, name, seconds, threads):
+        entry = self.kernels[name]
+        entry[0] += 1
+        entry[1] += seconds
+        entry[2] += threads
+        entry[3] = max(entry[3], threads)
+
+    def phase(self, name, seconds):
+        self.phases[name][0] += 1
+        self.phases[name][1] += seconds
+
+
+def _timed_phase(recorder, name, function):
+    @functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        started = time.perf_counter()
+        try:
+            return function(*args, **kwargs)
+        finally:
+            recorder.phase(name, time.perf_counter() - started)
+    return wrapper
+
+
+def _timed_launch(recorder, launch):
+    @functools.wraps(launch)
+    def wrapper(self, name, threads, *args):
+        self.synchronize()  # what was queued before (copies) is not this kernel's
+        started = time.perf_counter()
+        launch(self, name, threads, *args)
+        self.synchronize()
+        if name == "move_ids":  # the polish (100 steps) apart from moves (50)
+            name = f"move_ids[{len(args[-3])} steps]"
+        recorder.kernel(name, time.perf_counter() - started, threads)
+    return wrapper
+
+
+def install(recorder):
+    """Patch the phases and both device adapters' launches; returns an undo function."""
+    from ndpack.backends import numba_cuda_backend, warp_backend
+
+    saved = []
+    for owner, name in PHASES:
+        original = getattr(owner, name)
+        saved.append((owner, name, original))
+        setattr(owner, name, _timed_phase(recorder, name, original))
+    for adapter in (warp_backend._WarpDevice, numba_cuda_backend._CudaDevice):
+        saved.append((adapter, "launch", adapter.launch))
+        adapter.launch = _timed_launch(recorder, adapter.launch)
+
+    def undo():
+        for owner, name, original in saved:
+            setattr(owner, name, original)
+    return undo
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--backends", nargs="+", default=["warp"])
+    parser.add_argument("--count", type=int, default=100_000)
+    parser.add_argument("--mesh", default=None, help="a mesh file; default the unit cube")
+    parser.add_argument("--out", default=None, help="write the tables as JSON here")
+    args = parser.parse_args()
+    shape = nd.TriangleMesh.load(args.mesh) if args.mesh else nd.Box(np.zeros(3), np.ones(3))
+    results = {}
+    for backend in args.backends:
+        nd.pack(shape, 3, backend=backend, mode="fast")
+        recorder = Recorder()
+        undo = install(recorder)
+        started = time.perf_counter()
+        try:
+            packing = nd.pack(shape, args.count, backend=backend, mode="fast")
+        finally:
+            undo()
+        wall = time.perf_counter() - started
+        rounds = len(packing.stats.time)
+        print(f"== {backend}: {len(packing.radii)} spheres, {rounds} rounds, {wall:.2f} s with every launch synchronised")
+        device = sum(entry[1] for entry in recorder.kernels.values())
+        print(f"   device kernels {device:.2f} s in {sum(e[0] for e in recorder.kernels.values())} launches")
+        print(f"   {'kernel':28s} {'calls':>6s} {'seconds':>8s} {'ms/call':>8s} {'threads':>10s} {'max':>8s}")
+        for name, (calls, seconds, threads, most) in sorted(recorder.kernels.items(), key=lambda item: -item[1][1]):
+            print(f"   {name:28s} {calls:6d} {seconds:8.3f} {1e3 * seconds / calls:8.3f} {threads:10d} {most:8d}")
+        print(f"   {'phase (inclusive)':28s} {'calls':>6s} {'seconds':>8s}")
+        for name, (calls, seconds) in sorted(recorder.phases.items(), key=lambda item: -item[1][1]):
+            print(f"   {name:28s} {calls:6d} {seconds:8.3f}")
+        results[backend] = dict(spheres=len(packing.radii), rounds=rounds, wall=wall, kernels=dict(recorder.kernels),
+                                phases=dict(recorder.phases))
+    if args.out:
+        with open(args.out, "w") as file:
+            json.dump(results, file, indent=1)
+
+
+if __name__ == "__main__":
+    main()
