@@ -71,8 +71,8 @@ def _timed_launch(recorder, launch):
         started = time.perf_counter()
         launch(self, name, threads, *args)
         self.synchronize()
-        if name == "move_ids":  # the polish (100 steps) apart from moves (50)
-            name = f"move_ids[{len(args[-3])} steps]"
+        if name == "move_ids":  # the polish apart from moves
+            name = "move_ids[polish]" if args[-1] else "move_ids[move]"
         recorder.kernel(name, time.perf_counter() - started, threads)
     return wrapper
 

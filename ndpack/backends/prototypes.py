@@ -359,6 +359,11 @@ class DevicePrototypes(Prototypes):
                           *index, found, table)
             device.launch("near_finish", count, found, d_radii.shape[0], self.d_counter, table)
             widest, self.reach[ids] = device.fetch((self.d_counter, 1), (bound, count))
+            if np.isnan(self.reach[ids]).any():  # index_near met a sphere id beyond the spheres
+                raise RuntimeError(
+                    "the device's sphere index is corrupt (a sphere id beyond the spheres); please report "
+                    "this with the shape and backend, and use backend='warp' or 'numba' meanwhile"
+                )
             if widest[0] <= self.width:
                 device.launch("set_floats", count, d_ids, bound, self.d_reach)
                 return d_centers, d_radii, table
