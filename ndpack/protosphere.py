@@ -46,10 +46,6 @@ EPS_START, EPS_END, COOLING_POWER = 0.5, 2e-6, 2.0
 #: becomes a sphere: the paper's 50 steps leave errors up to 1e-2 in 4D and above, because a
 #: zig-zag towards a Voronoi node advances only a fraction of each step.
 POLISH_ITERATIONS, POLISH_EPS_START, POLISH_EPS_END, POLISH_POWER = 100, 0.05, 1e-7, 1.0
-#: The fast mode polishes in half as many steps in 2D and 3D: the exact unit-cube radii come out
-#: within 2e-6 with 50 (against 3e-4 in 4D and 1e-3 in 5D), and on the GPU a mesh's polish is the
-#: longest launch of a round (one thread walks the tree once a step). The faithful mode keeps 100.
-POLISH_ITERATIONS_FAST_LOW_DIM = 50
 #: Candidates within this fraction of the best clearance are polished.
 POLISH_WINDOW = 0.05
 #: A prototype swallowed by a new sphere may restart this factor of its radius from its centre.
@@ -91,11 +87,6 @@ def cooling_schedule(
     if iterations == 1:
         return np.array([start])
     return start * (end / start) ** ((np.arange(iterations) / (iterations - 1)) ** power)
-
-
-def polish_iterations(dim: int, mode: str) -> int:
-    """Steps of the leaders' polish in ``dim`` dimensions and ``mode``."""
-    return POLISH_ITERATIONS_FAST_LOW_DIM if mode == "fast" and dim <= 3 else POLISH_ITERATIONS
 
 
 def grid_counts(bounds: np.ndarray, grid=None) -> np.ndarray:
@@ -145,12 +136,12 @@ def _check_parameters(n, min_radius, fill, time_budget, iterations, batch, resta
 class _ProtoSphere:
     """The state of one packing run: prototypes, their cells, and the spheres so far."""
 
-    def __init__(self, shape, backend, counts, iterations, restarts, rng, polish=POLISH_ITERATIONS):
+    def __init__(self, shape, backend, counts, iterations, restarts, rng):
         self.shape = shape
         self.backend = backend
         self.dim = shape.dim
         self.steps = cooling_schedule(iterations)
-        self.polish_steps = cooling_schedule(polish, POLISH_EPS_START, POLISH_EPS_END, POLISH_POWER)
+        self.polish_steps = cooling_schedule(POLISH_ITERATIONS, POLISH_EPS_START, POLISH_EPS_END, POLISH_POWER)
         self.restarts = restarts
         self.rng = rng
         # A float32 backend's clearances are good to about 1e-7 of the scale: it asks for more.
@@ -527,12 +518,11 @@ def pack(
         grid=counts.tolist(), iterations=int(iterations), batch=int(batch), mode=mode,
         restarts=int(restarts), seed=seed, backend=backend.name, device=str(getattr(backend, "device", "cpu")),
         eps_start=EPS_START, eps_end=EPS_END, cooling_power=COOLING_POWER,
-        polish_iterations=polish_iterations(shape.dim, mode), polish_window=POLISH_WINDOW, safety_margin=SAFETY_MARGIN,
+        polish_iterations=POLISH_ITERATIONS, polish_window=POLISH_WINDOW, safety_margin=SAFETY_MARGIN,
         fast_window=FAST_WINDOW, split_ratio=SPLIT_RATIO,
     )
     started = time.perf_counter()
-    state = _ProtoSphere(shape, backend, counts, int(iterations), int(restarts), np.random.default_rng(seed),
-                         polish_iterations(shape.dim, mode))
+    state = _ProtoSphere(shape, backend, counts, int(iterations), int(restarts), np.random.default_rng(seed))
     volume = shape.volume()
     if not volume.value > 0:
         raise ShapeError(
