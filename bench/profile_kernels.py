@@ -3,8 +3,8 @@
     python bench/profile_kernels.py --backends warp numba-cuda --count 100000 [--mesh armadillo.obj]
 
 Every kernel launch of the device store is made synchronous and timed (so its time is the
-device's, launch included, and copies queued before it are timed apart as ``(copies before)``);
-the cell-centre distances are timed the same way. The driver's phases are timed inclusively
+device's, launch included; copies queued before it are waited for first, and not counted).
+The driver's phases are timed inclusively
 (``refine`` contains ``_split``, which contains ``reconverge``). Synchronising every launch
 slows the run down: the total is not the unprofiled time. Compiles first (a 3-sphere packing).
 """
@@ -116,7 +116,8 @@ def main():
             undo()
         wall = time.perf_counter() - started
         rounds = len(packing.stats.time)
-        print(f"== {backend}: {len(packing.radii)} spheres, {rounds} rounds, {wall:.2f} s with every launch synchronised")
+        print(f"== {backend}: {len(packing.radii)} spheres, {rounds} rounds, {wall:.2f} s "
+              "with every launch synchronised")
         device = sum(entry[1] for entry in recorder.kernels.values())
         print(f"   device kernels {device:.2f} s in {sum(e[0] for e in recorder.kernels.values())} launches")
         print(f"   {'kernel':28s} {'calls':>6s} {'seconds':>8s} {'ms/call':>8s} {'threads':>10s} {'max':>8s}")

@@ -58,8 +58,8 @@ MAX_PROTOTYPES = 16_000_000
 #: distances (about 1e-16 of the scale) can never make touching spheres overlap or poke out.
 SAFETY_MARGIN = 1e-10
 #: Fast mode: candidates within this fraction of the largest clearance become spheres in one round
-#: (those disjoint from the larger ones kept). 0.2 takes half the rounds of 0.1 for about 0.1% less
-#: fill (armadillo and unit cube at 100,000 spheres; docs/benchmarks.md); 0.3 loses 0.3%.
+#: (those disjoint from the larger ones kept). 0.2 takes half the rounds of 0.1 for 0.07-0.17% less
+#: fill (unit cube and armadillo at 100,000 spheres; docs/benchmarks.md); 0.3 loses 0.3%.
 FAST_WINDOW = 0.2
 #: Fast mode: a cell splits in two (across its longest side) while that side is longer than this
 #: many times the largest clearance and the cell could still hold a candidate, so that the gaps
@@ -508,7 +508,7 @@ def pack(
     if mode == "fast" and batch != 1:
         raise ParameterError(
             f"batch={batch!r} applies to the faithful mode only: the fast mode takes every candidate "
-            "within 20% of the largest a round; drop batch or use mode='faithful'"
+            f"within {FAST_WINDOW:.0%} of the largest a round; drop batch or use mode='faithful'"
         )
     check_packable(shape)
     backend = get_backend(backend, device=device, shape=shape)

@@ -350,7 +350,8 @@ def index_near(b, lower, upper, bound, counting, centers, radii, origin, top, he
                 continue
             if s >= radii.shape[0] or s >= nxt.shape[0] or s >= level_next.shape[0]:
                 # Never on a sound index. Guarding the walk also keeps numba-cuda from an illegal
-                # address it met without it (docs/benchmarks.md, issue 5's third measurement); NaN tells the host.
+                # address it met without it (docs/benchmarks.md, issue 5's third measurement);
+                # NaN tells the host.
                 return math.nan, found
             mine = listed
             if not listed and level_of[s] == level:  # skip other cells' spheres in this bucket
