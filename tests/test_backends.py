@@ -232,6 +232,10 @@ def _exercise(store, centers, radii, rng):
     answers["after_polish"] = store.all()
     answers["unpolished"] = store.select(unpolished=True)[0]
     answers["low"] = store.select(high=0.02)
+    # The largest clearance, and the largest below the 10th largest (the fast mode's frontier).
+    tenth = np.sort(store.all()[1])[-10]
+    answers["top"] = np.array([store.top(), store.top(below=tenth), store.top(below=-np.inf)])
+    assert answers["top"][0] > answers["top"][1] > 0 and answers["top"][2] == -np.inf
     return answers
 
 

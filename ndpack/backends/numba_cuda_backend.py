@@ -71,9 +71,9 @@ def append(i, points, clearance, polished, counter, out_ids, out_values, out_poi
     out_flags[slot] = polished[i]
 
 
-def max_all(clearance, out):
+def max_all(clearance, below, out):
     i = cuda.grid(1)
-    if i < clearance.shape[0]:
+    if i < clearance.shape[0] and clearance[i] < below:
         cuda.atomic.max(out, 0, clearance[i])
 
 

@@ -87,6 +87,10 @@ class Prototypes:
         and their clearances: ((m,) int64, (m,) float64)."""
         raise NotImplementedError
 
+    def top(self, below=np.inf) -> float:
+        """The largest clearance below ``below``; -inf where none is."""
+        raise NotImplementedError
+
     def leaders(self, k: int, window: float):
         """The ``k`` largest clearances (fewer if n < k), largest first, and the unpolished near them.
 
@@ -158,6 +162,10 @@ class HostPrototypes(Prototypes):
             mask &= ~self.polished
         ids = np.flatnonzero(mask)
         return ids, self.clearance[ids]
+
+    def top(self, below=np.inf):
+        below_bound = self.clearance[self.clearance < below]
+        return float(below_bound.max()) if len(below_bound) else -np.inf
 
     def leaders(self, k, window):
         k = min(k, len(self))
@@ -294,13 +302,18 @@ class DevicePrototypes(Prototypes):
         times the maximum where that is positive; the maximum is found on the device first."""
         if relative >= 0:
             self.device.fill(self.d_top, -np.inf)
-            self.device.launch("max_all", len(self), self.d_clearance, self.d_top)
+            self.device.launch("max_all", len(self), self.d_clearance, np.inf, self.d_top)
         return self._compact("select_all", self.d_clearance, self.d_polished, self.d_points, float(low),
                              float(high), int(unpolished), self.d_top, float(relative))
 
     def select(self, low=-np.inf, high=np.inf, unpolished=False):
         ids, clearance, _, _, _ = self._select(low, high, unpolished)
         return ids, clearance
+
+    def top(self, below=np.inf):
+        self.device.fill(self.d_top, -np.inf)
+        self.device.launch("max_all", len(self), self.d_clearance, float(below), self.d_top)
+        return float(self.device.fetch((self.d_top, 1))[0][0])
 
     def leaders(self, k, window):
         k = min(k, len(self))

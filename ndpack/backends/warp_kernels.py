@@ -212,8 +212,10 @@ def append(i: int, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F), p
 
 
 @wp.kernel
-def max_all(clearance: wp.array(dtype=F), out: wp.array(dtype=F)):
-    wp.atomic_max(out, 0, clearance[wp.tid()])
+def max_all(clearance: wp.array(dtype=F), below: F, out: wp.array(dtype=F)):
+    c = clearance[wp.tid()]
+    if c < below:
+        wp.atomic_max(out, 0, c)
 
 
 @wp.kernel
