@@ -66,8 +66,9 @@ FAST_WINDOW = 0.2
 #: being filled are never much smaller than the cells that search for them.
 SPLIT_RATIO = 4.0
 #: Fast mode: fewer candidates than this at the top, late finds at the last round's size,
-#: join the next level's round (:meth:`_ProtoSphere.choose_window`). At 40,000-150,000 spheres this
-#: takes a third fewer rounds for 0.03-0.05% less fill in the armadillo, none in the unit cube.
+#: join the next level's round (:meth:`_ProtoSphere.choose_window`): 26-36% fewer rounds for 0.03-0.05%
+#: less fill in the armadillo at 40,000, 70,000 and 150,000 spheres, 29-43% fewer and within 0.01%
+#: in the unit cube at 30,000 and 100,000 (2 cores; docs/benchmarks.md).
 SMALL_ROUND = 64
 #: Fast mode: at most this many candidates a round (bounds the host's conflict check).
 MAX_CANDIDATES = 1 << 16
@@ -157,9 +158,8 @@ class _ProtoSphere:
         self.centers = np.empty((64, self.dim))
         self.radii = np.empty(64)
         self.rounds = np.empty(64, dtype=np.int64)
-        # Fast mode: the last round's frontier (largest clearance, late finds aside) and the
-        # lowest clearance its window took.
-        self.frontier, self.floor = np.inf, np.inf
+        # Fast mode: the last round's frontier (largest clearance, late finds aside).
+        self.frontier = np.inf
         self._place_prototypes(counts)
 
     # ------------------------------------------------------------------ prototypes
@@ -308,15 +308,15 @@ class _ProtoSphere:
             if top <= 0:
                 return np.empty((0, self.dim)), np.empty(0)
             frontier = top
-            if top >= self.floor and len(store.select(low=(1 - window) * top)[0]) < SMALL_ROUND:
+            if top >= (1 - window) * self.frontier and len(store.select(low=(1 - window) * top)[0]) < SMALL_ROUND:
                 below = store.top(below=(1 - window) * top)
                 frontier = below if below > 0 else top
             unpolished, _ = store.select(low=(1 - window - POLISH_WINDOW) * frontier, unpolished=True)
             if len(unpolished) == 0:
                 break
             store.move(unpolished, *self.spheres, self.polish_steps, polish=True)
-        self.frontier, self.floor = frontier, (1 - window) * frontier
-        ids, clearance = store.select(low=self.floor)
+        self.frontier = frontier
+        ids, clearance = store.select(low=(1 - window) * frontier)
         order = top_order(ids, clearance, min(MAX_CANDIDATES, len(ids)))
         centers, clearance = self.prototypes.gather(ids[order])
         radii = clearance - self.margin
@@ -327,8 +327,8 @@ class _ProtoSphere:
 
     def refine(self, top, window, ratio=SPLIT_RATIO):
         """Fast mode: split in two, across their longest side, the cells longer than ``ratio``
-        times ``top`` (the largest clearance) whose clearance bound reaches the candidates'
-        window; the new halves' prototypes converge. Repeats on the halves; how many split.
+        times ``top`` (the round's frontier, see :meth:`choose_window`) whose clearance bound
+        reaches the candidates' window; the new halves' prototypes converge. Repeats on the halves; how many split.
 
         Work per round follows the cells that may split, not all cells: each cell's longest side
         and an upper bound of its clearance are kept on the host. The bound stays valid as
@@ -447,7 +447,7 @@ def nearest_sphere(points, centers, radii):
     for i, rivals in zip(unsure, tree.query_ball_point(points[unsure], reach)):
         rivals = np.unique(np.append(rest[np.asarray(rivals, dtype=np.int64)], best[i]))
         best[i] = rivals[np.argmin(np.linalg.norm(points[i] - centers[rivals], axis=1) - radii[rivals])]
-    for start in range(0, len(points), 4096):  # the few largest, against every point
+    for start in range(0, len(points) if len(large) else 0, 4096):  # the few largest, against every point
         rows = slice(start, start + 4096)
         candidates = np.concatenate([best[rows, None], np.broadcast_to(large, (len(best[rows]), len(large)))], axis=1)
         candidates.sort(axis=1)  # argmin takes the first of equals: the lowest id

@@ -346,7 +346,6 @@ def gradient_all(points, prm, hint, bound, out_feature, out_distance, out_gradie
         out_feature[i] = f
         if f == -2.0:  # none within the bound
             continue
-        out_feature[i] = f
         out_distance[i] = sd_at(points[i], prm, f)
         for k in range(D):
             out_gradient[i, k] = sd_slope(points[i], prm, f, out_distance[i], k)

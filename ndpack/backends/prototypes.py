@@ -164,8 +164,7 @@ class HostPrototypes(Prototypes):
         return ids, self.clearance[ids]
 
     def top(self, below=np.inf):
-        below_bound = self.clearance[self.clearance < below]
-        return float(below_bound.max()) if len(below_bound) else -np.inf
+        return float(np.max(self.clearance, where=self.clearance < below, initial=-np.inf))
 
     def leaders(self, k, window):
         k = min(k, len(self))
