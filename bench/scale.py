@@ -67,7 +67,25 @@ def timed_pack(shape, count, backend, **options):
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return packing, dict(compile_s=compile_s, seconds=seconds, spheres=len(packing), rounds=len(packing.stats.time),
                          stop=packing.stop_reason, time_to=times, verified=bool(packing.verify().ok),
-                         peak_host_mb=peak_mb)
+                         peak_host_mb=peak_mb, curve=curve(packing))
+
+
+def show(*runs):
+    """Print runs without their curves (they are in the JSON)."""
+    for run in runs:
+        print({k: v for k, v in run.items() if k != "curve"}, flush=True)
+
+
+def curve(packing, points=60):
+    """Count, fill and seconds at up to ``points`` rounds evenly spaced in log(count), for the plots
+    (``bench/plot_scale.py``): a dict of three lists."""
+    counts = packing.stats.count
+    if len(counts) == 0:
+        return dict(count=[], fill=[], seconds=[])
+    marks = np.exp(np.linspace(np.log(max(counts[0], 1)), np.log(counts[-1]), points))
+    rounds = np.unique(np.minimum(np.searchsorted(counts, marks), len(counts) - 1))
+    return dict(count=counts[rounds].tolist(), fill=packing.stats.fill[rounds].tolist(),
+                seconds=packing.stats.time[rounds].tolist())
 
 
 def exponent(packing, low):
@@ -94,14 +112,14 @@ def armadillo(args, backend, subdivided=False):
     packing, run = timed_pack(mesh, max(args.counts), backend, mode="fast")
     run.update(case=label, mode="fast", backend=backend, fill=fill_at(packing, args.counts))
     runs.append(run)
-    print(run, flush=True)
+    show(run)
     if args.faithful_count:
         reference, run = timed_pack(mesh, args.faithful_count, backend, mode="faithful")
         counts = [c for c in args.counts if c <= args.faithful_count] + [args.faithful_count]
         run.update(case=label, mode="faithful", backend=backend, fill=fill_at(reference, counts))
         run["fast_fill_ratio"] = {c: fill_at(packing, [c])[c] / fill_at(reference, [c])[c] for c in counts}
         runs.append(run)
-        print(run, flush=True)
+        show(run)
     return runs
 
 
@@ -113,7 +131,7 @@ def unit_box(args, backend, dim):
     theory = {2: 0.5275, 3: 0.2126}[dim]
     run.update(case=f"unit {('square', 'cube')[dim - 2]}", mode="fast", backend=backend, fill=fill_at(packing, marks),
                exponent=exponent(packing, count / 100), exponent_theory=theory)
-    print(run, flush=True)
+    show(run)
     return [run]
 
 
@@ -130,7 +148,7 @@ def quality(args, backend):
                        fill=fill_at(packings[mode], marks))
             runs.append(run)
         runs[-1]["fast_fill_ratio"] = {c: runs[-1]["fill"][c] / runs[-2]["fill"][c] for c in marks}
-        print(runs[-2], runs[-1], sep="\n", flush=True)
+        show(runs[-2], runs[-1])
     return runs
 
 
@@ -139,8 +157,9 @@ def high_dimensions(args, backend):
     for dim in (4, 5, 6):
         shape = nd.Ball(np.zeros(dim), 1.0) - nd.Ball(np.full(dim, 0.3), 0.4)
         packing, run = timed_pack(shape, args.nd_count, backend, mode="fast")
-        run.update(case=f"{dim}-D ball with a hole", mode="fast", backend=backend, fill=fill_at(packing, [args.nd_count]))
-        print(run, flush=True)
+        run.update(case=f"{dim}-D ball with a hole", mode="fast", backend=backend,
+                   fill=fill_at(packing, [args.nd_count]))
+        show(run)
         runs.append(run)
     return runs
 
@@ -196,7 +215,7 @@ def voxel(args, backend):
                     radius_error_median=float(np.median(fast_error)), radius_error_max=float(fast_error.max()))
     runs += [run, fast_run]
     for r in runs:
-        print(r, flush=True)
+        show(r)
     return runs
 
 
