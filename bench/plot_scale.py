@@ -27,15 +27,14 @@ def load_runs(paths):
     runs = []
     for path in paths:
         results = json.loads(Path(path).read_text())
-        cores = results["machine"].get("cpu_count")
         for run in results["runs"]:
             if run.get("curve", {}).get("count"):
-                run["label"] = f"{run['case']} ({run['backend']}, {cores} cores)"
+                run["label"] = f"{run['case']} ({run['backend']})"
                 runs.append(run)
     return runs
 
 
-def plot_fill(runs, path):
+def plot_fill(runs, path, machine=""):
     fig, ax = plt.subplots(figsize=(7, 4.8))
     for run in runs:
         count = np.asarray(run["curve"]["count"], float)
@@ -50,11 +49,11 @@ def plot_fill(runs, path):
             ax.loglog(xs, end_uncovered * (xs / end_count) ** -theory, "--", color=line.get_color(), lw=1)
             fitted = run.get("exponent")
             ax.annotate(f"a = {fitted:.3f} (theory {theory:.3f})" if fitted else f"theory {theory:.3f}",
-                        (end_count, end_uncovered), textcoords="offset points", xytext=(-150, 8), fontsize=8,
+                        (xs[0], end_uncovered * 100**theory), textcoords="offset points", xytext=(0, -22), fontsize=8,
                         color=line.get_color())
     ax.set_xlabel("spheres")
     ax.set_ylabel("uncovered fraction 1 - fill")
-    ax.set_title("Fast mode: fill against count (dashed: the Apollonian slope)")
+    ax.set_title(f"Fast mode: fill against count{machine} (dashed: the Apollonian slope)", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -62,7 +61,7 @@ def plot_fill(runs, path):
     plt.close(fig)
 
 
-def plot_time(runs, path):
+def plot_time(runs, path, machine=""):
     fig, ax = plt.subplots(figsize=(7, 4.8))
     for run in runs:
         count = np.asarray(run["curve"]["count"], float)
@@ -71,7 +70,7 @@ def plot_time(runs, path):
         ax.loglog(count[keep], seconds[keep], label=run["label"])
     ax.set_xlabel("spheres")
     ax.set_ylabel("seconds since nd.pack started (compile apart)")
-    ax.set_title("Fast mode: time to each count")
+    ax.set_title(f"Fast mode: time to each count{machine}", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -83,12 +82,14 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("results", nargs="+", help="bench/scale.py JSON files")
     parser.add_argument("--out", default="docs/img/scale", help="path prefix of the two PNGs")
+    parser.add_argument("--machine", default="", help="named in the titles, e.g. 'H100'")
     args = parser.parse_args()
     runs = load_runs(args.results)
+    machine = f", {args.machine}" if args.machine else ""
     if not runs:
         parser.error("none of these results has a curve: run bench/scale.py again (it records one per run)")
-    plot_fill([r for r in runs if r["case"] in THEORY or "armadillo" in r["case"]], f"{args.out}_fill.png")
-    plot_time(runs, f"{args.out}_time.png")
+    plot_fill([r for r in runs if r["case"] in THEORY or "armadillo" in r["case"]], f"{args.out}_fill.png", machine)
+    plot_time(runs, f"{args.out}_time.png", machine)
     print(f"wrote {args.out}_fill.png and {args.out}_time.png")
 
 
