@@ -1,38 +1,97 @@
-"""The ``ndpack`` command line. ``ndpack pack --help`` lists the options."""
+"""The ``ndpack`` command line: ``pack``, ``verify``, ``render``, ``info`` and ``backends``.
+
+Every mistake in the input ends in one line on stderr and a non-zero exit: 2 for bad input,
+1 for a packing that fails verification, 130 for an interrupted run (after saving what it made).
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
 import time
+from pathlib import Path
 
 from .errors import NdpackError
 
-EXAMPLES = """examples:
-  ndpack pack                          # the 3-D demo part, 1000 spheres
-  ndpack pack box:dim=4 -n 500 -o box4.npz
-  ndpack pack ball --dim 6 -n 200
+PACK_EXAMPLES = """examples:
+  ndpack pack                                   # the 3-D demo part, 1000 spheres
+  ndpack pack box:dim=4 -n 500 -o box4.npz      # a built-in shape, any dimension
+  ndpack pack cow.obj -n 5000 --mode fast -o cow.npz
+  ndpack pack part.py -n 2000 -o part.vtp       # a script that sets `shape` (ndpack or manifold3d)
+  ndpack pack my_shapes:gyroid -n 1000          # a plug-in: module:function
   ndpack pack annulus -n 2000 --batch 8 -o ring.csv
-  ndpack pack box:dim=3 -n 100000 --mode fast -o cube.npz
-built-in shapes: {shapes}
+  ndpack pack box:dim=3 -n 100000 --mode fast --backend warp --device cuda:0 -o cube.npz
+
+SHAPE is a built-in name[:key=value,...], a mesh file (.obj .stl .ply .off .glb ...), a Python
+script (.py) that sets `shape`, or module:function. Built-in shapes: {shapes}.
+Ctrl-C stops the run and still writes what was packed to --output.
+
+output formats (by suffix, or --format):
+{formats}
 """
+
+VERIFY_EXAMPLES = """examples:
+  ndpack verify cow.npz                         # the shape recorded in the file
+  ndpack verify spheres.csv --shape part.stl    # a packing made elsewhere, against a mesh
+exit status: 0 valid, 1 a violation, 2 bad input.
+"""
+
+RENDER_EXAMPLES = """examples:
+  ndpack render cow.npz -o cow.png              # 3-D: a shaded picture
+  ndpack render cow.npz -o cow.png --view=-35,20 --axes 2,0,1   # '=' before a negative number
+  ndpack render cow.npz -o cut.png --clip 0,0,0,1,0,0     # drop the spheres beyond x = 0
+  ndpack render ring.npz -o ring.svg            # 2-D: circles with the outline
+  ndpack render box4.npz -o slice.png --kind slice --axes 0,1 --at 0.5,0.5,0.5,0.5
+  ndpack render cube.npz -o fill.png --kind fill
+"""
+
+INFO_EXAMPLES = """examples:
+  ndpack info cow.npz
+"""
+
+
+def _numbers(text: str) -> tuple:
+    try:
+        return tuple(float(x) for x in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+
+
+def _integers(text: str) -> tuple:
+    try:
+        return tuple(int(x) for x in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated integers, got {text!r}") from None
+
+
+def _size(text: str) -> tuple:
+    width, x, height = text.lower().partition("x")
+    try:
+        return int(width), int(height)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT such as 900x900, got {text!r}") from None
 
 
 def _parser() -> argparse.ArgumentParser:
     from .builtin import BUILTIN
+    from .formats import table
 
-    parser = argparse.ArgumentParser(prog="ndpack", description="Pack spheres into shapes.")
-    commands = parser.add_subparsers(dest="command", required=True)
-    pack = commands.add_parser(
-        "pack",
-        help="pack a built-in shape and print a summary",
-        epilog=EXAMPLES.format(shapes=", ".join(BUILTIN)),
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+    parser = argparse.ArgumentParser(
+        prog="ndpack",
+        description="Fill shapes, in any dimension, with non-overlapping spheres (ProtoSphere).",
+        epilog="`ndpack COMMAND --help` shows each command's options and examples.",
     )
-    pack.add_argument("shape", nargs="?", default="demo", help="shape spec name[:key=value,...] (default: demo)")
-    pack.add_argument("--dim", type=int, help="dimension of the built-in shape (same as :dim=)")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    raw = argparse.RawDescriptionHelpFormatter
+
+    pack = commands.add_parser("pack", help="pack a shape and save the spheres", formatter_class=raw,
+                               epilog=PACK_EXAMPLES.format(shapes=", ".join(BUILTIN), formats=table()))
+    pack.add_argument("shape", nargs="?", default="demo",
+                      help="built-in spec, mesh file, .py script or module:function (default: demo)")
+    pack.add_argument("--dim", type=int, help="dimension of a built-in shape (same as :dim=)")
     pack.add_argument("-n", "--count", type=int, default=1000, help="number of spheres (default 1000)")
-    pack.add_argument("-o", "--output", help="write the packing to this .npz or .csv file")
+    pack.add_argument("-o", "--output", help="write the packing here; the suffix picks the format")
+    pack.add_argument("--format", help="the output format where the suffix does not say (e.g. curobo, medial)")
     pack.add_argument("--min-radius", type=float, default=0.0, help="stop below this radius")
     pack.add_argument("--fill", type=float, help="stop at this fill fraction")
     pack.add_argument("--time", type=float, dest="time_budget", help="stop after this many seconds")
@@ -46,17 +105,46 @@ def _parser() -> argparse.ArgumentParser:
     pack.add_argument("--backend", help="numpy, numba, numba-cuda or warp (default: $NDPACK_BACKEND or the fastest)")
     pack.add_argument("--device", help="cpu or cuda:N, for warp and numba-cuda")
     pack.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+
+    verify = commands.add_parser("verify", help="re-check a saved packing against its shape", formatter_class=raw,
+                                 epilog=VERIFY_EXAMPLES)
+    verify.add_argument("packing", help="a packing file (.npz, .csv, .json, ...)")
+    verify.add_argument("--shape", help="the shape to check against (default: the one the file records)")
+    verify.add_argument("--tol", type=float, help="overlap and containment tolerance (default: ndpack's)")
+
+    render = commands.add_parser("render", help="draw a saved packing to .png, .svg or .pdf", formatter_class=raw,
+                                 epilog=RENDER_EXAMPLES)
+    render.add_argument("packing", help="a packing file")
+    render.add_argument("-o", "--output", help="the picture (default: the packing's name with .png)")
+    render.add_argument("--kind", choices=("auto", "render", "slice", "fill"), default="auto",
+                        help="auto: circles in 2-D, a shaded render in 3-D and up; slice: circles cut by a "
+                        "plane; fill: fill against count")
+    render.add_argument("--size", type=_size, help="WIDTHxHEIGHT of a shaded render (default 900x900)")
+    render.add_argument("--view", type=_numbers, help="azimuth,elevation in degrees (default 35,25)")
+    render.add_argument("--axes", type=_integers, help="the axes of the picture or slice, e.g. 0,1 or 0,1,2")
+    render.add_argument("--at", type=_numbers, help="a point of the slice (default: the centres' mean)")
+    render.add_argument("--clip", type=_numbers, help="px,py,pz,nx,ny,nz: drop spheres beyond this plane")
+    render.add_argument("--shape", help="the shape whose outline a slice draws (default: the recorded one)")
+
+    info = commands.add_parser("info", help="summarise a saved packing", formatter_class=raw, epilog=INFO_EXAMPLES)
+    info.add_argument("packing", help="a packing file")
+
+    commands.add_parser("backends", help="list the backends that work here, and why the others do not")
     return parser
 
 
+# ---------------------------------------------------------------------------------------- pack
 def _pack(args) -> int:
-    from .builtin import from_spec
+    from .formats import save
     from .protosphere import pack
+    from .sources import describe, load_shape
 
-    spec = args.shape
+    source = args.shape
     if args.dim is not None:
-        spec += ("," if ":" in spec else ":") + f"dim={args.dim}"
-    shape = from_spec(spec)
+        source += ("," if ":" in source else ":") + f"dim={args.dim}"
+    shape = load_shape(source)
+    if args.output:
+        _check_output(args.output, args.format)
     started = time.perf_counter()
     packing = pack(
         shape,
@@ -74,6 +162,7 @@ def _pack(args) -> int:
         progress=not args.quiet and sys.stderr.isatty(),
     )
     elapsed = time.perf_counter() - started
+    packing.params["source"] = describe(source)
     report = packing.verify()
     print(f"shape:    {args.shape} -> {shape!r}")
     print(f"spheres:  {len(packing)} (stopped by {packing.stop_reason})")
@@ -82,20 +171,150 @@ def _pack(args) -> int:
     print(f"time:     {elapsed:.2f} s ({packing.params['backend']} backend)")
     print(f"verified: {report.summary()}")
     if args.output:
-        print(f"saved:    {packing.save(args.output)}")
+        print(f"saved:    {save(packing, args.output, args.format)}")
+    if packing.stop_reason == "interrupted":
+        print("ndpack: interrupted; " + ("kept what was packed" if args.output else "nothing saved (no --output)"),
+              file=sys.stderr)
+        return 130
     return 0 if report.ok else 1
+
+
+def _check_output(path: str, format: str | None) -> None:
+    """Refuse a bad output name before the packing, not after it."""
+    from .formats import FORMATS, SUFFIXES
+    from .errors import ParameterError
+
+    if format is not None:
+        if format not in FORMATS:
+            raise ParameterError(f"unknown format {format!r}; known formats: {', '.join(FORMATS)}")
+    elif Path(path).suffix.lower() not in SUFFIXES:
+        raise ParameterError(f"cannot tell the format of {path!r}: use one of {', '.join(SUFFIXES)} or --format")
+    folder = Path(path).expanduser().resolve().parent
+    if not folder.is_dir():
+        raise ParameterError(f"cannot write {path}: no folder {folder}")
+
+
+# ------------------------------------------------------------------------- saved packings
+def _load(path: str):
+    from .formats import load
+
+    return load(path)
+
+
+def _recorded_shape(packing, override: str | None, required: bool):
+    """The shape given on the command line, else the one the packing records (``params["source"]``)."""
+    from .sources import load_shape
+
+    source = override or packing.params.get("source")
+    if source is None:
+        if required:
+            raise NdpackError("this packing does not record its shape (made outside `ndpack pack`): pass --shape")
+        return None
+    return load_shape(source)
+
+
+def _verify(args) -> int:
+    from .verify import verify
+
+    packing = _load(args.packing)
+    shape = _recorded_shape(packing, args.shape, required=True)
+    report = verify(packing, shape, args.tol)
+    print(f"{args.packing}: {len(packing)} spheres in {packing.dim}-D against {shape!r}")
+    print(f"verified: {report.summary()}")
+    return 0 if report.ok else 1
+
+
+def _render(args) -> int:
+    from .render import picture
+
+    packing = _load(args.packing)
+    output = args.output or str(Path(args.packing).with_suffix(".png"))
+    options = {}
+    for name in ("size", "view", "axes", "at"):
+        if getattr(args, name) is not None:
+            options[name] = getattr(args, name)
+    if args.clip is not None:
+        if len(args.clip) != 2 * packing.dim:
+            raise NdpackError(
+                f"--clip needs {2 * packing.dim} numbers for a {packing.dim}-D packing: a point, then a normal"
+            )
+        options["clip"] = (args.clip[: packing.dim], args.clip[packing.dim:])
+    kind = args.kind
+    draws_circles = kind == "slice" or (kind == "auto" and (packing.dim == 2 or Path(output).suffix.lower() != ".png"))
+    if draws_circles:
+        options.pop("size", None), options.pop("view", None), options.pop("clip", None)
+        shape = _recorded_shape(packing, args.shape, required=False)
+        if shape is not None:
+            options["shape"] = shape
+    elif kind == "fill":
+        options = {}
+    print(f"wrote {picture(packing, output, kind=kind, **options)}")
+    return 0
+
+
+def _info(args) -> int:
+    import numpy as np
+
+    packing = _load(args.packing)
+    radii = packing.radii
+    print(f"file:       {args.packing}")
+    print(f"spheres:    {len(packing)} in {packing.dim}-D, {len(packing.stats.count)} rounds, "
+          f"stopped by {packing.stop_reason or '-'}")
+    if np.isfinite(packing.volume):
+        error = f" +- {packing.fill_error:.4f}" if packing.volume_error else ""
+        print(f"fill:       {packing.fill:.6f}{error} of volume {packing.volume:.6g}")
+    if len(radii):
+        quartiles = np.percentile(radii, [0, 25, 50, 75, 100])
+        print("radii:      min {:.4g}  q1 {:.4g}  median {:.4g}  q3 {:.4g}  max {:.4g}".format(*quartiles))
+        print("            ratio max/min {:.3g}".format(radii.max() / radii.min()))
+        _radius_histogram(radii)
+    if len(packing.stats.time):
+        print(f"time:       {packing.stats.time[-1]:.2f} s")
+    if packing.medial_axis is not None and len(packing.medial_axis):
+        print(f"medial:     {len(packing.medial_axis)} medial-axis points")
+    for key, value in sorted(packing.params.items()):
+        print(f"  {key}: {value}")
+    return 0
+
+
+def _radius_histogram(radii, bins: int = 8, width: int = 40) -> None:
+    """Counts per radius band, log-spaced: a packing's radii span orders of magnitude."""
+    import numpy as np
+
+    low, high = radii.min(), radii.max()
+    edges = np.geomspace(low, high, bins + 1) if high > low else np.array([low, high + 1e-300])
+    counts, _ = np.histogram(radii, edges)
+    for left, right, count in zip(edges[:-1], edges[1:], counts):
+        bar = "#" * int(round(width * count / max(counts.max(), 1)))
+        print(f"    {left:10.4g} - {right:<10.4g} {count:9d} {bar}")
+
+
+def _backends(args) -> int:
+    from .backends import available
+
+    status = available()
+    for name, state in status.items():
+        print(f"{name:11s} {state}")
+    return 0 if any(s.startswith("ok") for s in status.values()) else 1
+
+
+COMMANDS = {"pack": _pack, "verify": _verify, "render": _render, "info": _info, "backends": _backends}
 
 
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     try:
-        return {"pack": _pack}[args.command](args)
+        return COMMANDS[args.command](args)
     except NdpackError as error:
-        print(f"ndpack: error: {error}", file=sys.stderr)
+        print(f"ndpack: error: {_one_line(error)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("ndpack: interrupted", file=sys.stderr)
         return 130
+
+
+def _one_line(error) -> str:
+    return " ".join(str(error).split())
 
 
 if __name__ == "__main__":

@@ -1,17 +1,15 @@
-"""The result of a packing run, and its files (``.npz`` with metadata, ``.csv``).
+"""The result of a packing run; its files are written and read by :mod:`ndpack.formats`.
 
 Spheres are stored in insertion order: row ``i`` is the ``i``-th sphere the driver placed.
 """
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
-from .errors import NdpackError
 from .oracle import ball_volume
 
 #: Bumped when the file layout changes; load() refuses files from the future.
@@ -135,102 +133,20 @@ class Packing:
         return f"<Packing {self.summary()}>"
 
     # ------------------------------------------------------------------ files
-    def _metadata(self) -> dict:
-        return {
-            "format": "ndpack-packing",
-            "version": FORMAT_VERSION,
-            "dim": self.dim,
-            "volume": self.volume,
-            "volume_error": self.volume_error,
-            "params": self.params,
-            "stop_reason": self.stop_reason,
-            "shape": repr(self.shape) if self.shape is not None else None,
-        }
+    def save(self, path, format: str | None = None, **options) -> Path:
+        """Write to a file in the format of its suffix, or the one named; returns the path.
 
-    def save(self, path) -> Path:
-        """Write to ``.npz`` (everything) or ``.csv`` (spheres and metadata); returns the path."""
-        path = Path(path)
-        suffix = path.suffix.lower()
-        if suffix == ".npz":
-            np.savez_compressed(
-                path,
-                centers=self.centers,
-                radii=self.radii,
-                rounds=self.rounds,
-                stats_time=self.stats.time,
-                stats_count=self.stats.count,
-                stats_fill=self.stats.fill,
-                medial_axis=self._or_empty(self.medial_axis),
-                medial_radii=self._or_empty(self.medial_radii, 1),
-                metadata=np.array(json.dumps(self._metadata())),
-            )
-        elif suffix == ".csv":
-            header = ",".join([*(f"x{i}" for i in range(self.dim)), "radius", "round"])
-            table = np.column_stack([self.centers, self.radii, self.rounds])
-            formats = ["%.17g"] * (self.dim + 1) + ["%d"]
-            comment = "# " + json.dumps(self._metadata())
-            np.savetxt(path, table, delimiter=",", fmt=formats, header=f"{comment}\n{header}", comments="")
-        else:
-            raise NdpackError(f"cannot save to {path.name!r}: use a .npz or .csv file name")
-        return path
+        ``.npz`` keeps everything, ``.csv`` the spheres and metadata, ``.json`` everything; the
+        others (``.ply``, ``.vtp``, ``.obj``/``.stl``/``.glb``, ``.sph``, ``format="curobo"``,
+        ``format="medial"``) and their ``options`` are listed by :func:`ndpack.formats.table`.
+        """
+        from .formats import save
 
-    def _or_empty(self, array, ndim=2):
-        if array is not None:
-            return array
-        return np.zeros((0, self.dim)) if ndim == 2 else np.zeros(0)
+        return save(self, path, format, **options)
 
     @classmethod
-    def load(cls, path) -> Packing:
-        """Read a packing written by :meth:`save` (``.npz`` or ``.csv``)."""
-        path = Path(path)
-        if not path.exists():
-            raise NdpackError(f"no such packing file: {path}")
-        suffix = path.suffix.lower()
-        try:
-            if suffix == ".npz":
-                with np.load(path, allow_pickle=False) as data:
-                    metadata = _check_metadata(json.loads(str(data["metadata"])), path)
-                    return cls(
-                        centers=data["centers"],
-                        radii=data["radii"],
-                        rounds=data["rounds"],
-                        volume=metadata["volume"],
-                        volume_error=metadata["volume_error"],
-                        stats=RoundStats(data["stats_time"], data["stats_count"], data["stats_fill"]),
-                        medial_axis=data["medial_axis"],
-                        medial_radii=data["medial_radii"],
-                        params=metadata["params"],
-                        stop_reason=metadata["stop_reason"],
-                    )
-            if suffix == ".csv":
-                with open(path) as file:
-                    first = file.readline()
-                if not first.startswith("# {"):
-                    raise ValueError("the first line is not ndpack's metadata comment")
-                metadata = _check_metadata(json.loads(first[2:]), path)
-                table = np.loadtxt(path, delimiter=",", skiprows=2, ndmin=2)
-                dim = metadata["dim"]
-                if table.size == 0:
-                    table = np.zeros((0, dim + 2))
-                return cls(
-                    centers=table[:, :dim],
-                    radii=table[:, dim],
-                    rounds=table[:, dim + 1].astype(np.int64),
-                    volume=metadata["volume"],
-                    volume_error=metadata["volume_error"],
-                    params=metadata["params"],
-                    stop_reason=metadata["stop_reason"],
-                )
-        except (KeyError, ValueError, OSError) as error:
-            raise NdpackError(f"{path} is not a readable ndpack packing: {error}") from error
-        raise NdpackError(f"cannot load {path.name!r}: use a .npz or .csv file written by ndpack")
+    def load(cls, path, format: str | None = None) -> Packing:
+        """Read a packing written by :meth:`save` (any format but ``medial``)."""
+        from .formats import load
 
-
-def _check_metadata(metadata: dict, path: Path) -> dict:
-    if metadata.get("format") != "ndpack-packing":
-        raise ValueError("it has no ndpack metadata")
-    if metadata.get("version", 0) > FORMAT_VERSION:
-        raise NdpackError(
-            f"{path} was written by a newer ndpack (format {metadata['version']}); upgrade ndpack"
-        )
-    return metadata
+        return load(path, format)

@@ -2,13 +2,57 @@
 
 A 2-D packing is drawn as its circles; a packing in any higher dimension as a slice: the circles
 in which the spheres meet a 2-D plane through ``at``, spanned by two coordinate ``axes``.
+:func:`save_figure` writes that picture to ``.png``, ``.svg`` or ``.pdf`` in one call;
+:func:`plot_fill` and :func:`save_fill_figure` draw the fill against the sphere count. Shaded 3-D
+pictures are in :mod:`ndpack.render`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .errors import DimensionError, NdpackError
+from .errors import DimensionError, NdpackError, ParameterError
+
+
+def slice_balls(centers, radii, axes=(0, 1, 2), at=None):
+    """Balls cut from the spheres by the flat through ``at`` spanned by ``axes``.
+
+    A d-ball of radius ``r`` whose centre lies at distance ``h`` from the flat meets it in a ball
+    of radius ``sqrt(r**2 - h**2)`` about the centre's projection.
+
+    Parameters
+    ----------
+    centers : (n, d) float64
+    radii : (n,) float64
+    axes : sequence of k different ints
+        The coordinate axes of the flat.
+    at : (d,) array_like, optional
+        A point of the flat (its other coordinates fix the slice); default the centres' mean.
+
+    Returns
+    -------
+    ball_centers : (m, k) float64
+    ball_radii : (m,) float64
+    index : (m,) int64
+        Which sphere each ball comes from.
+    """
+    centers = np.asarray(centers, dtype=np.float64)
+    radii = np.asarray(radii, dtype=np.float64)
+    dim = centers.shape[1]
+    axes = [int(axis) for axis in axes]
+    if len(set(axes)) != len(axes) or not all(0 <= axis < dim for axis in axes):
+        raise DimensionError(f"axes must be {len(axes)} different axes of a {dim}-D packing, got {tuple(axes)}")
+    others = [k for k in range(dim) if k not in axes]
+    if not others:  # the flat is the whole space: every sphere, whole
+        return centers[:, axes], radii.copy(), np.arange(len(radii))
+    if at is None:
+        at = centers.mean(axis=0) if len(centers) else np.zeros(dim)
+    at = np.asarray(at, dtype=np.float64).reshape(-1)
+    if at.shape != (dim,):
+        raise DimensionError(f"at must be a point of the {dim}-D packing, got shape {at.shape}")
+    offset_sq = ((centers[:, others] - at[others]) ** 2).sum(axis=1)
+    index = np.flatnonzero(offset_sq < radii**2)
+    return centers[index][:, axes], np.sqrt(radii[index] ** 2 - offset_sq[index]), index
 
 
 def slice_circles(centers, radii, axes=(0, 1), at=None):
@@ -30,36 +74,62 @@ def slice_circles(centers, radii, axes=(0, 1), at=None):
     index : (k,) int64
         Which sphere each circle comes from.
     """
-    dim = centers.shape[1]
-    i, j = axes
-    if not (0 <= i < dim and 0 <= j < dim and i != j):
-        raise DimensionError(f"axes must be two different axes of a {dim}-D packing, got {axes}")
-    at = centers.mean(axis=0) if at is None else np.asarray(at, dtype=np.float64)
-    others = [k for k in range(dim) if k not in (i, j)]
-    offset_sq = ((centers[:, others] - at[others]) ** 2).sum(axis=1)
-    index = np.flatnonzero(offset_sq < radii**2)
-    return centers[index][:, [i, j]], np.sqrt(radii[index] ** 2 - offset_sq[index]), index
+    if len(axes) != 2:
+        raise DimensionError(f"a plane has two axes, got {tuple(axes)}")
+    return slice_balls(centers, radii, axes, at)
 
 
-def plot(packing, shape=None, ax=None, axes=(0, 1), at=None, cmap="viridis", outline=True):
+def circle_collection(centers, radii, **options):
+    """A Matplotlib collection of circles in data coordinates, one path each.
+
+    Built from one unit circle scaled and shifted in NumPy: ten times faster than a collection of
+    ``Circle`` patches (about 1 s for 100,000 circles).
+
+    Parameters
+    ----------
+    centers : (k, 2) float64
+    radii : (k,) float64
+    **options
+        Passed to ``PathCollection``.
+    """
+    from matplotlib.collections import PathCollection
+    from matplotlib.path import Path
+
+    unit = Path.unit_circle()
+    vertices = np.asarray(centers)[:, None, :] + np.asarray(radii)[:, None, None] * unit.vertices[None]
+    return PathCollection([Path(ring, unit.codes, readonly=True) for ring in vertices], **options)
+
+
+def plot(packing, shape=None, ax=None, axes=(0, 1), at=None, cmap="viridis", outline=True, rasterized=None):
     """Draw a packing (2-D) or a slice of it (any dimension); returns the Matplotlib ``Axes``.
 
-    Circles are coloured by the radius of their sphere; the shape's outline in the plane is drawn
-    from its distance field when the shape is known.
+    Circles are coloured by the radius of their sphere (on a log scale when the radii span more
+    than 10x); the shape's outline in the plane is drawn from its distance field when the shape
+    is known (a packing loaded from a file has none: pass ``shape=`` or go without).
+
+    Parameters
+    ----------
+    rasterized : bool, optional
+        Draw the circles as an image inside vector output (SVG, PDF); default: above
+        :data:`RASTERIZE_ABOVE` circles. The outline, axes and text stay vector.
     """
     try:
         import matplotlib.pyplot as plt
-        from matplotlib.collections import PatchCollection
-        from matplotlib.patches import Circle
     except ImportError as error:  # pragma: no cover - matplotlib is a dependency
         raise NdpackError(f"plotting needs matplotlib: pip install matplotlib ({error})") from error
+    from matplotlib.colors import LogNorm
+
+    from .render import radius_norm
+
     shape = packing.shape if shape is None else shape
     centers2, radii2, index = slice_circles(packing.centers, packing.radii, axes, at)
     if ax is None:
         _, ax = plt.subplots(figsize=(6, 6))
-    patches = PatchCollection([Circle(c, r) for c, r in zip(centers2, radii2)], cmap=cmap, linewidths=0)
-    patches.set_array(packing.radii[index])
-    ax.add_collection(patches)
+    circles = circle_collection(centers2, radii2, cmap=cmap, linewidths=0)
+    circles.set_array(packing.radii[index])
+    circles.set_norm(radius_norm(packing.radii[index]))
+    circles.set_rasterized(len(index) > RASTERIZE_ABOVE if rasterized is None else bool(rasterized))
+    ax.add_collection(circles)
     if shape is not None:
         lower, upper = shape.bounds[0][list(axes)], shape.bounds[1][list(axes)]
     elif len(centers2):
@@ -79,8 +149,155 @@ def plot(packing, shape=None, ax=None, axes=(0, 1), at=None, cmap="viridis", out
     if packing.dim > 2:
         title += f" (slice: {len(index)} cut)"
     ax.set_title(title)
-    ax.figure.colorbar(patches, ax=ax, label="radius", shrink=0.8)
+    _edge_circles(ax, circles, radii2, upper - lower + 2 * pad)
+    colorbar = ax.figure.colorbar(circles, ax=ax, label="sphere radius", shrink=0.8)
+    if isinstance(circles.norm, LogNorm):
+        _plain_log_ticks(colorbar, circles.norm)
     return ax
+
+
+def _edge_circles(ax, circles, radii, span):
+    """Thin white rims that keep touching circles apart, thinner on small circles (a rim as wide
+    as a small circle would paint it white)."""
+    box = ax.get_position()  # figure fraction, before the colour bar takes its share
+    width, height = ax.figure.get_size_inches()
+    points_per_unit = 72.0 * min(box.width * width / span[0], box.height * height / span[1])
+    circles.set_edgecolor("white")
+    circles.set_linewidths(np.clip(0.12 * radii * points_per_unit, 0.0, 0.6))
+
+
+def _plain_log_ticks(colorbar, norm):
+    """Tick labels 0.01, 0.02, 0.05 instead of powers of ten; minor labels only across few decades."""
+    from matplotlib.ticker import FuncFormatter
+
+    decades = np.log10(norm.vmax / norm.vmin)
+
+    def minor(value, _position):
+        mantissa = value / 10 ** np.floor(np.log10(value) + 1e-9)
+        wanted = (2, 5) if decades > 1 else (2, 3, 5)
+        return f"{value:g}" if decades <= 2 and any(abs(mantissa - m) < 1e-6 for m in wanted) else ""
+
+    colorbar.ax.yaxis.set_major_formatter(FuncFormatter(lambda value, _position: f"{value:g}"))
+    colorbar.ax.yaxis.set_minor_formatter(FuncFormatter(minor))
+
+
+#: Above this many circles, vector output holds them as one embedded image (an SVG of 100,000
+#: circle paths is tens of megabytes and slow to open).
+RASTERIZE_ABOVE = 5000
+#: File types Matplotlib writes for :func:`save_figure` and :func:`save_fill_figure`.
+FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
+
+
+def save_figure(packing, path, shape=None, axes=(0, 1), at=None, dpi=200, figsize=(6, 6), cmap="viridis",
+                outline=True, rasterized=None):
+    """Draw a 2-D packing, or a 2-D slice of any packing, to a ``.png``, ``.svg`` or ``.pdf`` file.
+
+    See :func:`plot` for the picture; ``dpi`` sets the PNG's resolution and that of the circles
+    when they are rasterized inside an SVG or PDF. Returns the path.
+    """
+    path = _figure_path(path)
+    figure = _figure(figsize)
+    plot(packing, shape=shape, ax=figure.add_subplot(), axes=axes, at=at, cmap=cmap, outline=outline,
+         rasterized=rasterized)
+    figure.savefig(path, dpi=dpi, bbox_inches="tight")
+    return path
+
+
+def plot_fill(packings, ax=None, log=True, uncovered=False, labels=None):
+    """Fill fraction (or the uncovered fraction ``1 - fill``) against sphere count, one line a packing.
+
+    One point a round, from :attr:`Packing.stats`.
+
+    Parameters
+    ----------
+    packings : Packing or sequence of Packing
+    ax : Axes, optional
+    log : bool
+        Logarithmic count axis (and, for ``uncovered``, a logarithmic fraction axis: the
+        uncovered fraction of a greedy packing falls about as a power of the count).
+    uncovered : bool
+        Plot ``1 - fill`` instead of ``fill``.
+    labels : sequence of str, optional
+        Legend entries; default the dimension, mode and backend of each run (a legend only
+        for more than one packing).
+
+    Returns
+    -------
+    Axes
+    """
+    import matplotlib.pyplot as plt
+
+    packings = [packings] if hasattr(packings, "stats") else list(packings)
+    if labels is not None and len(labels) != len(packings):
+        raise NdpackError(f"got {len(labels)} labels for {len(packings)} packings")
+    for number, packing in enumerate(packings):
+        if len(packing.stats.count) == 0:
+            raise NdpackError(
+                f"packing {number} has no per-round statistics (a packing loaded from .csv keeps none; "
+                "save to .npz to keep them)"
+            )
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6, 4.5))
+    for number, packing in enumerate(packings):
+        count = np.asarray(packing.stats.count)
+        fill = np.asarray(packing.stats.fill)
+        label = labels[number] if labels is not None else _run_label(packing)
+        values = 1.0 - fill if uncovered else fill
+        ax.plot(count, values, marker="o" if len(count) <= 40 else None, markersize=3, linewidth=1.2, label=label)
+    if log:
+        ax.set_xscale("log")
+        if uncovered:
+            ax.set_yscale("log")
+    ax.set_xlabel("spheres")
+    ax.set_ylabel("uncovered fraction (1 - fill)" if uncovered else "fill fraction")
+    ax.grid(True, which="major", alpha=0.35)
+    if log:
+        ax.grid(True, which="minor", alpha=0.12)
+    if len(packings) > 1:
+        ax.legend(fontsize="small")
+    return ax
+
+
+def save_fill_figure(packings, path, log=True, labels=None, dpi=150, figsize=(11, 4.5)):
+    """Fill and uncovered fraction against sphere count side by side (:func:`plot_fill`), to a file.
+
+    Returns the path.
+    """
+    path = _figure_path(path)
+    figure = _figure(figsize)
+    fill_axes, uncovered_axes = figure.subplots(1, 2)
+    plot_fill(packings, ax=fill_axes, log=log, labels=labels)
+    plot_fill(packings, ax=uncovered_axes, log=log, uncovered=True, labels=labels)
+    figure.tight_layout()
+    figure.savefig(path, dpi=dpi)
+    return path
+
+
+def _run_label(packing):
+    params = packing.params or {}
+    parts = [f"{packing.dim}-D"] + [str(params[key]) for key in ("mode", "backend") if params.get(key)]
+    return ", ".join(parts)
+
+
+def _figure(figsize):
+    """A figure outside pyplot's registry (no window, nothing left open), with an Agg canvas."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=figsize)
+    FigureCanvasAgg(figure)
+    return figure
+
+
+def _figure_path(path):
+    from pathlib import Path
+
+    path = Path(path)
+    if path.suffix.lower() not in FIGURE_SUFFIXES:
+        raise ParameterError(
+            f"cannot write a figure to {path.name!r}: the file name must end in {', '.join(FIGURE_SUFFIXES)}"
+        )
+    return path
 
 
 def _draw_outline(ax, shape, axes, at, lower, upper, resolution=400):

@@ -50,3 +50,149 @@ def test_fast_mode_from_the_command_line(tmp_path):
     assert packing.verify(nd.Box([0, 0], [1, 1])).ok
     result = run("pack", "box", "--mode", "quick")
     assert result.returncode == 2 and "invalid choice" in result.stderr
+
+
+# ------------------------------------------------------------------ shape sources, formats, subcommands
+import os  # noqa: E402
+import signal  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+MESHES = Path(__file__).parent / "data" / "meshes"
+
+
+def one_line_error(result, *words):
+    assert result.returncode == 2, (result.stdout, result.stderr)
+    line = result.stderr.strip().splitlines()[-1]
+    assert line.startswith("ndpack: error:") and "Traceback" not in result.stderr, result.stderr
+    for word in words:
+        assert word in line, line
+    return line
+
+
+@pytest.fixture(scope="module")
+def saved_square(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cli") / "square.npz"
+    result = run("pack", "square", "-n", "60", "--backend", "numpy", "--grid", "16", "-o", str(out), "-q")
+    assert result.returncode == 0, result.stderr
+    return out
+
+
+def test_pack_a_mesh_file_and_verify_it_from_the_recorded_source(tmp_path):
+    mesh = next(MESHES.glob("cow*.ply"))
+    out = tmp_path / "cow.json"
+    result = run("pack", str(mesh), "-n", "25", "--backend", "numpy", "--grid", "12", "-o", str(out), "-q")
+    assert result.returncode == 0, result.stderr
+    packing = nd.Packing.load(out)
+    assert len(packing) == 25 and packing.params["source"] == str(mesh.resolve())
+    result = run("verify", str(out))
+    assert result.returncode == 0 and "valid" in result.stdout, result.stderr
+
+
+def test_pack_a_script_and_a_plugin(tmp_path):
+    script = tmp_path / "part.py"
+    script.write_text("import ndpack as nd\nshape = nd.Box([0, 0], [2, 1]) - nd.Ball([1, 0.5], 0.3)\n")
+    out = tmp_path / "part.csv"
+    result = run("pack", str(script), "-n", "20", "--backend", "numpy", "--grid", "16", "-o", str(out), "-q")
+    assert result.returncode == 0, result.stderr
+    assert nd.Packing.load(out).centers[:, 0].max() > 1.0  # the 2x1 box, not a unit square
+    (tmp_path / "my_plugin_shapes.py").write_text(
+        "import ndpack as nd\ndef slab():\n    return nd.Box([0, 0, 0], [1, 1, 0.25])\n")
+    out = tmp_path / "slab.npz"
+    result = subprocess.run([sys.executable, "-m", "ndpack.cli", "pack", "my_plugin_shapes:slab", "-n", "10",
+                             "--backend", "numpy", "--grid", "8", "-o", str(out), "-q"],
+                            capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    packing = nd.Packing.load(out)
+    assert np.all(packing.radii <= 0.125 + 1e-9)
+    assert run("verify", str(out)).returncode == 2  # the module is beside the file, not here: one line
+    result = subprocess.run([sys.executable, "-m", "ndpack.cli", "verify", str(out)], capture_output=True, text=True,
+                            timeout=300, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+
+
+def test_bad_sources_and_outputs_give_one_line(tmp_path):
+    one_line_error(run("pack", str(tmp_path / "missing.stl")), "no such file")
+    one_line_error(run("pack", str(tmp_path)), "folder")
+    broken = tmp_path / "broken.py"
+    broken.write_text("raise RuntimeError('no part today')\n")
+    one_line_error(run("pack", str(broken)), "no part today")
+    empty = tmp_path / "empty.py"
+    empty.write_text("x = 1\n")
+    one_line_error(run("pack", str(empty)), "does not set `shape`")
+    one_line_error(run("pack", "no_such_module_xyz:shape"), "no_such_module_xyz")
+    one_line_error(run("pack", "box", "-o", str(tmp_path / "out.xyz")), "cannot tell the format")
+    one_line_error(run("pack", "box", "-o", str(tmp_path / "none" / "out.npz")), "no folder")
+    one_line_error(run("pack", "box", "--backend", "abacus"), "unknown backend")
+
+
+def test_verify_fails_on_a_violation_and_needs_a_shape(saved_square, tmp_path):
+    packing = nd.Packing.load(saved_square)
+    bad = packing.replace_spheres(packing.centers.copy(), packing.radii * 1.5, packing.rounds)
+    bad.save(tmp_path / "bad.npz")
+    result = run("verify", str(tmp_path / "bad.npz"))
+    assert result.returncode == 1 and "overlapping" in result.stdout
+    bare = tmp_path / "bare.npz"  # spheres made elsewhere: no recorded source
+    nd.Packing(packing.centers, packing.radii, packing.rounds, volume=1.0).save(bare)
+    one_line_error(run("verify", str(bare)), "--shape")
+    assert run("verify", str(bare), "--shape", "square").returncode == 0
+    one_line_error(run("verify", str(tmp_path / "missing.npz")), "no such")
+
+
+def test_render_and_info(saved_square, tmp_path):
+    for name in ("square.png", "square.svg"):
+        result = run("render", str(saved_square), "-o", str(tmp_path / name))
+        assert result.returncode == 0, result.stderr
+        assert (tmp_path / name).stat().st_size > 1000
+    result = run("render", str(saved_square), "-o", str(tmp_path / "fill.png"), "--kind", "fill")
+    assert result.returncode == 0 and (tmp_path / "fill.png").exists(), result.stderr
+    one_line_error(run("render", str(saved_square), "-o", str(tmp_path / "x.gif")), ".png")
+    result = run("info", str(saved_square))
+    assert result.returncode == 0, result.stderr
+    assert "60 in 2-D" in result.stdout and "median" in result.stdout and "source: square" in result.stdout
+    one_line_error(run("info", str(tmp_path / "nothing.npz")), "no such")
+
+
+def test_render_a_3d_packing(tmp_path):
+    out = tmp_path / "ball.npz"
+    assert run("pack", "ball", "-n", "20", "--backend", "numpy", "--grid", "8", "-o", str(out), "-q").returncode == 0
+    result = run("render", str(out), "-o", str(tmp_path / "ball.png"), "--size", "120x100", "--view", "10,20",
+                 "--clip", "0,0,0,1,0,0")
+    assert result.returncode == 0, result.stderr
+    import matplotlib.image
+
+    assert matplotlib.image.imread(tmp_path / "ball.png").shape[:2] == (100, 120)
+    one_line_error(run("render", str(out), "--clip", "0,0,1"), "--clip needs 6")
+
+
+def test_backends_lists_every_backend_with_a_reason():
+    result = run("backends")
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.strip().splitlines()
+    assert [line.split()[0] for line in lines] == nd.backends.names()
+    assert lines[0].split()[1] == "ok"  # numpy always works
+
+
+def test_every_subcommand_has_help_with_examples():
+    for command in ("pack", "verify", "render", "info"):
+        result = run(command, "--help")
+        assert result.returncode == 0 and "examples:" in result.stdout, command
+    assert "backends" in run("--help").stdout
+
+
+@pytest.mark.skipif(os.name != "posix", reason="sends SIGINT")
+def test_ctrl_c_keeps_what_was_packed(tmp_path):
+    out = tmp_path / "stopped.npz"
+    process = subprocess.Popen([sys.executable, "-m", "ndpack.cli", "pack", "box:dim=2", "-n", "100000",
+                                "--backend", "numpy", "--grid", "40", "-o", str(out), "-q"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(8)  # imports, prototypes, then a few rounds
+    process.send_signal(signal.SIGINT)
+    stdout, stderr = process.communicate(timeout=120)
+    assert process.returncode == 130, stderr
+    packing = nd.Packing.load(out)
+    assert 0 < len(packing) < 100000 and packing.stop_reason == "interrupted"
+    assert packing.verify(nd.Box([0, 0], [1, 1])).ok

@@ -1,0 +1,129 @@
+"""Where a shape comes from, as the command line names it: one string, four kinds.
+
+=============================== ===========================================================
+``box:dim=4``, ``demo``         a named shape (:mod:`ndpack.builtin`, or a package's entry point)
+``part.stl``, ``cow.obj``       a triangle mesh file (anything trimesh reads)
+``part.py``                     a Python script that sets ``shape`` (an ndpack shape, or a
+                                manifold3d, trimesh or shapely object), or defines ``shape()``
+``my_shapes:gyroid``            a plug-in: ``module:function`` (or ``module:attribute``),
+                                imported from the current folder or the installed packages
+=============================== ===========================================================
+
+:func:`load_shape` turns the string into an oracle and explains any mistake in one line. A
+packing made from a source records it (``params["source"]``), so ``ndpack verify`` and
+``ndpack render`` can rebuild the shape later.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import runpy
+import sys
+from pathlib import Path
+
+from .errors import ShapeError
+
+#: Suffixes read as triangle meshes (trimesh reads these and more).
+MESH_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".3mf", ".dae")
+
+
+def load_shape(source: str):
+    """The shape a source string names; see the module's table.
+
+    Returns
+    -------
+    Oracle
+    """
+    from .builtin import from_spec, registered
+    from .shapes.adapters import as_oracle
+
+    text = source.strip()
+    if not text:
+        raise ShapeError("the shape is empty: name a built-in shape (e.g. box:dim=3), a mesh file or a script")
+    path = Path(text).expanduser()
+    suffix = path.suffix.lower()
+    if path.is_dir():
+        raise ShapeError(f"{text} is a folder, not a mesh file or a script")
+    if suffix == ".py" or suffix in MESH_SUFFIXES or path.is_file() or "/" in text or os.sep in text:
+        if not path.exists():
+            raise ShapeError(f"no such file: {text}")
+        if suffix == ".py":
+            return _checked(as_oracle(_from_script(path)), text)
+        from .shapes.mesh import TriangleMesh
+
+        return TriangleMesh.load(path)
+    name, colon, rest = text.partition(":")
+    if name.strip().lower() in registered() or not colon or "=" in rest:
+        return from_spec(text)
+    return _checked(as_oracle(_from_plugin(name.strip(), rest.strip())), text)
+
+
+def _from_script(path: Path):
+    """Run a script and take its ``shape`` (a value, or a function called with no arguments)."""
+    folder = str(path.resolve().parent)
+    sys.path.insert(0, folder)  # the script may import its neighbours
+    try:
+        namespace = runpy.run_path(str(path), run_name="__ndpack_shape__")
+    except SystemExit as error:
+        raise ShapeError(f"{path} exited ({error.code}) instead of defining shape") from None
+    except Exception as error:  # noqa: BLE001 - any failure in the user's script, reported in one line
+        raise ShapeError(f"{path} failed: {type(error).__name__}: {error}") from None
+    finally:
+        if sys.path and sys.path[0] == folder:
+            sys.path.pop(0)
+    if "shape" not in namespace:
+        raise ShapeError(
+            f"{path} does not set `shape`: end it with, e.g., shape = part (an ndpack or manifold3d solid)"
+        )
+    return _called(namespace["shape"], f"{path}: shape()")
+
+
+def _from_plugin(module_name: str, attribute: str):
+    if not module_name.replace(".", "").replace("_", "").isalnum() or not attribute.isidentifier():
+        raise ShapeError(f"cannot read {module_name}:{attribute}: write module:function, e.g. my_shapes:gyroid")
+    if os.getcwd() not in sys.path and "" not in sys.path:
+        sys.path.insert(0, os.getcwd())  # as `python -c` would: a module beside the user
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as error:
+        raise ShapeError(
+            f"unknown shape {module_name!r}, and no module {module_name!r} to import ({error}); "
+            f"see `ndpack pack --help` for the shapes you can name"
+        ) from None
+    except Exception as error:  # noqa: BLE001 - the plug-in's own import failed
+        raise ShapeError(f"importing {module_name} failed: {type(error).__name__}: {error}") from None
+    if not hasattr(module, attribute):
+        raise ShapeError(f"module {module_name} has no {attribute!r}")
+    return _called(getattr(module, attribute), f"{module_name}:{attribute}()")
+
+
+def _called(value, label: str):
+    """A function is called with no arguments; anything else is the shape itself."""
+    from .oracle import Oracle
+
+    if callable(value) and not isinstance(value, Oracle) and isinstance(value, type(_called)):
+        try:
+            return value()
+        except Exception as error:  # noqa: BLE001 - the user's function, reported in one line
+            raise ShapeError(f"{label} failed: {type(error).__name__}: {error}") from None
+    return value
+
+
+def _checked(shape, source: str):
+    from .oracle import Oracle
+
+    if not isinstance(shape, Oracle):
+        raise ShapeError(
+            f"{source} gave a {type(shape).__name__}, not a shape: return an ndpack shape, or a manifold3d, "
+            f"trimesh or shapely solid"
+        )
+    return shape
+
+
+def describe(source: str) -> str:
+    """The source as a packing records it: files as absolute paths, so it works from anywhere."""
+    path = Path(source.strip()).expanduser()
+    if path.is_file():
+        return str(path.resolve())
+    return source.strip()
