@@ -11,7 +11,7 @@ import sys
 import time
 from pathlib import Path
 
-from .errors import NdpackError
+from .errors import NdpackError, ParameterError
 
 PACK_EXAMPLES = """examples:
   ndpack pack                                   # the 3-D demo part, 1000 spheres
@@ -21,6 +21,7 @@ PACK_EXAMPLES = """examples:
   ndpack pack my_shapes:gyroid -n 1000          # a plug-in: module:function
   ndpack pack annulus -n 2000 --batch 8 -o ring.csv
   ndpack pack box:dim=3 -n 100000 --mode fast --backend warp --device cuda:0 -o cube.npz
+  ndpack pack cow.obj -n 3000 --mode fast -o cow.json --format curobo --option link=cow
 
 SHAPE is a built-in name[:key=value,...], a mesh file (.obj .stl .ply .off .glb ...), a Python
 script (.py) that sets `shape`, or module:function. Built-in shapes: {shapes}.
@@ -72,6 +73,14 @@ def _size(text: str) -> tuple:
         raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT such as 900x900, got {text!r}") from None
 
 
+def _option(text: str) -> tuple:
+    """``KEY=VALUE`` -> ``(key, value)``, the value an int where it reads as one."""
+    key, equals, value = text.partition("=")
+    if not equals or not key:
+        raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
+    return key.strip(), int(value) if value.strip().lstrip("-").isdigit() else value
+
+
 def _parser() -> argparse.ArgumentParser:
     from .builtin import BUILTIN
     from .formats import table
@@ -92,6 +101,8 @@ def _parser() -> argparse.ArgumentParser:
     pack.add_argument("-n", "--count", type=int, default=1000, help="number of spheres (default 1000)")
     pack.add_argument("-o", "--output", help="write the packing here; the suffix picks the format")
     pack.add_argument("--format", help="the output format where the suffix does not say (e.g. curobo, medial)")
+    pack.add_argument("--option", action="append", default=[], metavar="KEY=VALUE", type=_option,
+                      help="a format option, repeatable: encoding=ascii, subdivisions=2, link=cow (see below)")
     pack.add_argument("--min-radius", type=float, default=0.0, help="stop below this radius")
     pack.add_argument("--fill", type=float, help="stop at this fill fraction")
     pack.add_argument("--time", type=float, dest="time_budget", help="stop after this many seconds")
@@ -135,7 +146,6 @@ def _parser() -> argparse.ArgumentParser:
 
 # ---------------------------------------------------------------------------------------- pack
 def _pack(args) -> int:
-    from .formats import save
     from .protosphere import pack
     from .sources import describe, load_shape
 
@@ -143,8 +153,11 @@ def _pack(args) -> int:
     if args.dim is not None:
         source += ("," if ":" in source else ":") + f"dim={args.dim}"
     shape = load_shape(source)
+    options = dict(args.option)
     if args.output:
-        _check_output(args.output, args.format)
+        _check_output(args.output, args.format, shape.dim, options)
+    elif options or args.format:
+        raise ParameterError("--format and --option describe the output file: give it with -o PATH")
     started = time.perf_counter()
     packing = pack(
         shape,
@@ -171,7 +184,7 @@ def _pack(args) -> int:
     print(f"time:     {elapsed:.2f} s ({packing.params['backend']} backend)")
     print(f"verified: {report.summary()}")
     if args.output:
-        print(f"saved:    {save(packing, args.output, args.format)}")
+        print(f"saved:    {_save_or_keep(packing, args.output, args.format, options)}")
     if packing.stop_reason == "interrupted":
         print("ndpack: interrupted; " + ("kept what was packed" if args.output else "nothing saved (no --output)"),
               file=sys.stderr)
@@ -179,19 +192,26 @@ def _pack(args) -> int:
     return 0 if report.ok else 1
 
 
-def _check_output(path: str, format: str | None) -> None:
-    """Refuse a bad output name before the packing, not after it."""
-    from .formats import FORMATS, SUFFIXES
-    from .errors import ParameterError
+def _check_output(path: str, format: str | None, dim: int, options: dict) -> None:
+    """Refuse a bad output (format, suffix, options, dimension, folder) before packing, not after."""
+    from .formats import check
 
-    if format is not None:
-        if format not in FORMATS:
-            raise ParameterError(f"unknown format {format!r}; known formats: {', '.join(FORMATS)}")
-    elif Path(path).suffix.lower() not in SUFFIXES:
-        raise ParameterError(f"cannot tell the format of {path!r}: use one of {', '.join(SUFFIXES)} or --format")
+    check(path, format, dim, **options)
     folder = Path(path).expanduser().resolve().parent
     if not folder.is_dir():
         raise ParameterError(f"cannot write {path}: no folder {folder}")
+
+
+def _save_or_keep(packing, path: str, format: str | None, options: dict) -> Path:
+    """Save to ``path``; if that fails after all (a full disk, a bad option value), keep the
+    packing in ``path + ".npz"`` and still report the error, so a long run is never lost."""
+    from .formats import save
+
+    try:
+        return save(packing, path, format, **options)
+    except NdpackError as error:
+        kept = save(packing, str(path) + ".npz")
+        raise NdpackError(f"{_one_line(error)}; the packing was kept in {kept}") from error
 
 
 # ------------------------------------------------------------------------- saved packings

@@ -75,16 +75,48 @@ def save(packing: Packing, path, format: str | None = None, **options) -> Path:
         mesh; ``link`` for curobo.
     """
     path = Path(path)
-    fmt = _resolve(path, format, "save to")
-    unknown = sorted(set(options) - set(fmt.options))
-    if unknown:
-        accepted = ", ".join(fmt.options) or "none"
-        raise NdpackError(f"the {fmt.name} format has no option {', '.join(unknown)} (its options: {accepted})")
+    fmt = check(path, format, packing.dim, **options)
     try:
         fmt.write(packing, path, **options)
     except OSError as error:
         raise NdpackError(f"cannot write {path}: {error.strerror or error}") from error
     return path
+
+
+def check(path, format: str | None = None, dim: int | None = None, **options) -> Format:
+    """The format :func:`save` would write ``path`` in; raises if it would refuse.
+
+    Checks the suffix (or ``format``), the options' names and, given ``dim``, that the format
+    holds packings of that dimension, so that a long packing can be refused before it starts
+    rather than after it ends.
+
+    Returns
+    -------
+    Format
+    """
+    path = Path(path)
+    fmt = _resolve(path, format, "save to")
+    unknown = sorted(set(options) - set(fmt.options))
+    if unknown:
+        accepted = ", ".join(fmt.options) or "none"
+        raise NdpackError(f"the {fmt.name} format has no option {', '.join(unknown)} (its options: {accepted})")
+    if dim is not None:
+        allowed = _dims(fmt, path.suffix.lower())
+        if fmt.name == "medial" and dim not in allowed:
+            raise DimensionError(f"PLY holds points in up to 3-D, not a {dim}-D medial axis: write it to a .csv file")
+        if dim not in allowed:
+            _require_dim(dim, allowed, f"the {fmt.name} format ({path.suffix.lower()})")
+    return fmt
+
+
+def _dims(fmt: Format, suffix: str) -> range:
+    """The dimensions ``fmt`` holds, from its table entry (``"any"``, ``"3"``, ``"1-3"``)."""
+    if fmt.name == "medial" and suffix == ".ply":
+        return range(1, 4)
+    if fmt.dims == "any":
+        return range(1, 1 << 30)
+    low, _, high = fmt.dims.partition("-")
+    return range(int(low), int(high or low) + 1)
 
 
 def load(path, format: str | None = None) -> Packing:
@@ -245,14 +277,14 @@ def _reading(fmt: Format, path: Path, read: Callable):
         raise NdpackError(f"{path} is not a readable ndpack packing ({fmt.name} format): {reason}") from error
 
 
-def _require_dim(packing: Packing, allowed: range, what: str) -> None:
-    if packing.dim not in allowed:
+def _require_dim(dim: int, allowed: range, what: str) -> None:
+    if dim not in allowed:
         if allowed.stop - allowed.start == 1:
             need = f"{allowed.start}-D spheres"
         else:
             need = f"spheres in {allowed.start} to {allowed.stop - 1} dimensions"
         raise DimensionError(
-            f"{what} holds {need}, not a {packing.dim}-D packing: use .npz, .csv or .json, which keep any dimension"
+            f"{what} holds {need}, not a {dim}-D packing: use .npz, .csv or .json, which keep any dimension"
         )
 
 
@@ -514,7 +546,7 @@ def _dimension_comment(dim: int) -> list[str]:
 
 
 def _write_ply(packing: Packing, path: Path, encoding: str | None = None) -> None:
-    _require_dim(packing, range(1, 4), "PLY (.ply)")
+    _require_dim(packing.dim, range(1, 4), "PLY (.ply)")
     if len(packing) and packing.rounds.max() > np.iinfo(np.int32).max:
         raise NdpackError("a round number exceeds PLY's 32-bit int: use .npz, .csv or .json")
     points = _xyz(packing.centers)
@@ -562,7 +594,7 @@ def _vtk_array(name: str, values: np.ndarray, kind: str, binary: bool, header: s
 
 
 def _write_vtp(packing: Packing, path: Path, encoding: str | None = None, header_type: str = "UInt64") -> None:
-    _require_dim(packing, range(1, 4), "VTK PolyData (.vtp)")
+    _require_dim(packing.dim, range(1, 4), "VTK PolyData (.vtp)")
     if header_type not in ("UInt64", "UInt32"):
         raise NdpackError(f"header_type must be 'UInt64' or 'UInt32', got {header_type!r}")
     binary = _encoding(encoding)
@@ -660,7 +692,7 @@ def _read_vtp(path: Path) -> Packing:
 
 # ---------------------------------------------------------------------------------- sphere meshes
 def _write_mesh(packing: Packing, path: Path, subdivisions: int = 1) -> None:
-    _require_dim(packing, range(3, 4), "a sphere mesh (.obj, .stl, .glb)")
+    _require_dim(packing.dim, range(3, 4), "a sphere mesh (.obj, .stl, .glb)")
     if not len(packing):
         raise NdpackError("an empty packing makes no sphere mesh (a mesh file with no triangles)")
     mesh = sphere_mesh(packing.centers, packing.radii, subdivisions)
@@ -728,7 +760,7 @@ def _write_sph(packing: Packing, path: Path) -> None:
     sphere, not necessarily the smallest such sphere. Numbers are written with 17 significant
     digits, so a read-back is exact.
     """
-    _require_dim(packing, range(3, 4), "the sphere-tree format (.sph)")
+    _require_dim(packing.dim, range(3, 4), "the sphere-tree format (.sph)")
     if len(packing):
         lower = (packing.centers - packing.radii[:, None]).min(axis=0)
         upper = (packing.centers + packing.radii[:, None]).max(axis=0)
@@ -786,7 +818,7 @@ def _read_sph(path: Path) -> Packing:
 # ---------------------------------------------------------------------------------- cuRobo spheres
 def _write_curobo(packing: Packing, path: Path, link: str = "body") -> None:
     """``{"collision_spheres": {link: [{"center": [x, y, z], "radius": r}, ...]}}``, a sphere a line."""
-    _require_dim(packing, range(3, 4), "cuRobo's collision_spheres")
+    _require_dim(packing.dim, range(3, 4), "cuRobo's collision_spheres")
     spheres = [
         json.dumps({"center": center, "radius": radius})
         for center, radius in zip(packing.centers.tolist(), packing.radii.tolist())

@@ -32,6 +32,7 @@ from .backends.prototypes import best_starts, top_order
 from .errors import ParameterError, ShapeError
 from .oracle import Oracle, ball_volume, check_compatible, check_packable
 from .shapes.adapters import as_oracle
+from .shapes.plugin import check_plugin_slopes
 from .packing import Packing, RoundStats
 from .verify import verify
 
@@ -557,6 +558,13 @@ def pack(
     Packing
         Verified in float64: every sphere inside ``shape`` and no two overlapping. An interrupted
         run (Ctrl-C) returns what it packed so far, with ``stop_reason == "interrupted"``.
+
+    Raises
+    ------
+    NdpackError
+        Before packing, with a one-line reason: a bad parameter (``ParameterError``), bounds
+        that cut the shape (``BoundsError``), or a plug-in found steeper than a distance on
+        random pairs of points (``OracleError``, see ``Function.check_lipschitz``).
     """
     shape = as_oracle(shape)
     check_compatible(shape)
@@ -569,6 +577,7 @@ def pack(
             f"within {FAST_WINDOW:.0%} of the largest a round; drop batch or use mode='faithful'"
         )
     check_packable(shape)
+    check_plugin_slopes(shape)
     backend = get_backend(backend, device=device, shape=shape)
     counts = grid_counts(shape.bounds, grid)
     params = dict(

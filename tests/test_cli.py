@@ -124,9 +124,36 @@ def test_bad_sources_and_outputs_give_one_line(tmp_path):
     empty.write_text("x = 1\n")
     one_line_error(run("pack", str(empty)), "does not set `shape`")
     one_line_error(run("pack", "no_such_module_xyz:shape"), "no_such_module_xyz")
-    one_line_error(run("pack", "box", "-o", str(tmp_path / "out.xyz")), "cannot tell the format")
+    one_line_error(run("pack", "box", "-o", str(tmp_path / "out.xyz")), "unknown suffix '.xyz'")
     one_line_error(run("pack", "box", "-o", str(tmp_path / "none" / "out.npz")), "no folder")
     one_line_error(run("pack", "box", "--backend", "abacus"), "unknown backend")
+
+
+def test_outputs_a_format_cannot_hold_are_refused_before_packing(tmp_path):
+    started = time.perf_counter()
+    one_line_error(run("pack", "square", "-n", "100000", "-o", str(tmp_path / "sq.stl")), "3-D spheres, not a 2-D")
+    one_line_error(run("pack", "box:dim=4", "-n", "100000", "-o", str(tmp_path / "b.ply")), "not a 4-D packing")
+    one_line_error(run("pack", "box", "-n", "100000", "-o", str(tmp_path / "b.ply"), "--format", "curobo"),
+                   "must end in .json")
+    one_line_error(run("pack", "box", "-n", "100000", "-o", str(tmp_path / "b.vtp"), "--option", "colour=red"),
+                   "no option colour")
+    one_line_error(run("pack", "box", "-n", "100000", "--format", "csv"), "-o PATH")
+    assert time.perf_counter() - started < 120  # none packed 100,000 spheres first
+    assert not list(tmp_path.iterdir())
+
+
+def test_format_options_and_a_failed_save_keeps_the_packing(tmp_path):
+    coarse, fine = tmp_path / "coarse.obj", tmp_path / "fine.obj"
+    for out, options in ((coarse, []), (fine, ["--option", "subdivisions=2"])):
+        result = run("pack", "box", "-n", "5", "--backend", "numpy", "--grid", "8", "-o", str(out), "-q", *options)
+        assert result.returncode == 0, result.stderr
+    assert len(nd.Packing.load(fine)) == len(nd.Packing.load(coarse)) == 5
+    assert fine.stat().st_size > 3 * coarse.stat().st_size  # four times the triangles a sphere
+    out = tmp_path / "bad.vtp"
+    line = one_line_error(run("pack", "box", "-n", "5", "--backend", "numpy", "--grid", "8", "-o", str(out), "-q",
+                              "--option", "encoding=utf8"), "encoding must be", "kept in")
+    kept = nd.Packing.load(str(out) + ".npz")
+    assert len(kept) == 5 and kept.verify(nd.Box([0] * 3, [1] * 3)).ok, line
 
 
 def test_verify_fails_on_a_violation_and_needs_a_shape(saved_square, tmp_path):

@@ -3,6 +3,8 @@
 import numpy as np
 import pytest
 
+import ndpack as nd
+
 from ndpack.errors import BoundsError, DimensionError, OracleError, ParameterError, ShapeError
 from ndpack.oracle import Oracle
 from ndpack.shapes.plugin import Function, plugin
@@ -154,6 +156,25 @@ def test_check_lipschitz():
     assert Function(lambda p: disc(p) / 2, 2, SQUARE_BOUNDS).check_lipschitz() <= 0.5 + 1e-9
     with pytest.raises(ParameterError):
         exact.check_lipschitz(samples=0)
+
+
+def test_pack_checks_the_slope_of_every_plugin_in_the_tree_once():
+    calls = []
+
+    def counted(p):
+        calls.append(len(p))
+        return disc(p)
+
+    steep = Function(lambda p: 2 * disc(p), 2, SQUARE_BOUNDS, name="steep")
+    with pytest.raises(OracleError, match="'steep' is not a conservative distance"):
+        nd.pack(nd.Box([-2, -2], [2, 2]) - steep.translate([0.5, 0]), n=5, backend="numpy")
+    fine = Function(counted, 2, SQUARE_BOUNDS, name="fine")
+    shape = fine | nd.Ball([0.2, 0.0], 0.3)
+    nd.pack(shape, n=5, backend="numpy", grid=8)
+    assert 4000 in calls  # the check: 2,000 pairs in one call
+    calls.clear()
+    nd.pack(shape, n=5, backend="numpy", grid=8)
+    assert 4000 not in calls  # not again for the same plug-in
 
 
 def test_user_gradient_is_used_and_normalised():

@@ -194,7 +194,8 @@ class Function(Oracle):
             raise OracleError(
                 f"the distance function {self.name!r} is not a conservative distance (Lipschitz "
                 f"constant at least {largest:.6g}, between {np.round(x, 6).tolist()} and "
-                f"{np.round(y, 6).tolist()}); divide it by {largest:.6g} to make it one"
+                f"{np.round(y, 6).tolist()}); divide it by a bound on its slope (at least {largest:.6g}) "
+                "to make it one"
             )
         return largest
 
@@ -233,3 +234,26 @@ def plugin(dim, bounds=None, **flags):
         return Function(fn, dim, bounds, **flags)
 
     return wrap
+
+
+def check_plugin_slopes(shape) -> None:
+    """Run :meth:`Function.check_lipschitz` on every plug-in in ``shape``'s tree, once each.
+
+    A plug-in steeper than 1 breaks what packing validity rests on, and verification cannot see
+    it (it asks the same function), so :func:`ndpack.pack` checks before packing. The result is
+    kept on the plug-in: packing it again costs nothing.
+    """
+    for node in _tree(shape):
+        if isinstance(node, Function) and not getattr(node, "_slope_checked", False):
+            node.check_lipschitz()
+            node._slope_checked = True
+
+
+def _tree(shape):
+    """``shape`` and every shape below it (CSG nodes keep theirs in ``children``, ``child`` or ``a``/``b``)."""
+    yield shape
+    below = list(getattr(shape, "children", ()))
+    below += [getattr(shape, name) for name in ("child", "a", "b") if hasattr(shape, name)]
+    for part in below:
+        if isinstance(part, Oracle):  # Capsule's a and b are points, not shapes
+            yield from _tree(part)
