@@ -7,6 +7,7 @@ Every mistake in the input ends in one line on stderr and a non-zero exit: 2 for
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import time
 from pathlib import Path
@@ -39,7 +40,7 @@ exit status: 0 valid, 1 a violation, 2 bad input.
 
 RENDER_EXAMPLES = """examples:
   ndpack render cow.npz -o cow.png              # 3-D: a shaded picture
-  ndpack render cow.npz -o cow.png --view=-35,20 --axes 2,0,1   # '=' before a negative number
+  ndpack render cow.npz -o cow.png --view -35,20 --axes 2,0,1
   ndpack render cow.npz -o cut.png --clip 0,0,0,1,0,0     # drop the spheres beyond x = 0
   ndpack render ring.npz -o ring.svg            # 2-D: circles with the outline
   ndpack render box4.npz -o slice.png --kind slice --axes 0,1 --at 0.5,0.5,0.5,0.5
@@ -261,15 +262,23 @@ def _render(args) -> int:
         options["clip"] = (args.clip[: packing.dim], args.clip[packing.dim:])
     kind = args.kind
     draws_circles = kind == "slice" or (kind == "auto" and (packing.dim == 2 or Path(output).suffix.lower() != ".png"))
-    if draws_circles:
-        options.pop("size", None), options.pop("view", None), options.pop("clip", None)
+    if kind == "fill":
+        _refuse(options, "a fill plot")
+    elif draws_circles:
+        _refuse({name: options[name] for name in ("size", "view", "clip") if name in options},
+                "a picture of circles (2-D, a slice, .svg or .pdf)")
         shape = _recorded_shape(packing, args.shape, required=False)
         if shape is not None:
             options["shape"] = shape
-    elif kind == "fill":
-        options = {}
     print(f"wrote {picture(packing, output, kind=kind, **options)}")
     return 0
+
+
+def _refuse(options: dict, picture: str) -> None:
+    if options:
+        given = ", ".join(f"--{name}" for name in options)
+        verb, pronoun = ("does", "it") if len(options) == 1 else ("do", "them")
+        raise ParameterError(f"{given} {verb} not apply to {picture}: leave {pronoun} out")
 
 
 def _info(args) -> int:
@@ -321,7 +330,24 @@ def _backends(args) -> int:
 COMMANDS = {"pack": _pack, "verify": _verify, "render": _render, "info": _info, "backends": _backends}
 
 
+#: Options whose value is a list of numbers, which may start with a minus sign.
+NUMBER_LIST_OPTIONS = ("--view", "--at", "--clip")
+NUMBER_LIST = re.compile(r"^-?[\d.]+(e-?\d+)?(,-?[\d.]+(e-?\d+)?)*$")
+
+
+def _join_negative_lists(argv: list[str]) -> list[str]:
+    """``--view -35,20`` -> ``--view=-35,20``: argparse would take ``-35,20`` for an option."""
+    joined = []
+    for token in argv:
+        if joined and joined[-1] in NUMBER_LIST_OPTIONS and token.startswith("-") and NUMBER_LIST.match(token):
+            joined[-1] = f"{joined[-1]}={token}"
+        else:
+            joined.append(token)
+    return joined
+
+
 def main(argv=None) -> int:
+    argv = _join_negative_lists(sys.argv[1:] if argv is None else list(argv))
     args = _parser().parse_args(argv)
     try:
         return COMMANDS[args.command](args)

@@ -553,6 +553,7 @@ def picture(packing, path, kind="auto", **options):
     if kind not in KINDS:
         raise ParameterError(f"unknown picture kind {kind!r}; use one of: {', '.join(KINDS)}")
     if kind == "fill":
+        _check_options(plot.save_fill_figure, options, "fill")
         plot.save_fill_figure(packing, path, **options)
         return path
     dim = packing.dim
@@ -565,11 +566,22 @@ def picture(packing, path, kind="auto", **options):
             f"a shaded render is written as {' or '.join(RENDER_SUFFIXES)}, not {suffix}; "
             f"use kind='slice' for a vector picture of a slice"
         )
-    if kind == "render":
-        render(packing, path, **options)
-    else:
-        plot.save_figure(packing, path, **options)
+    draw = render if kind == "render" else plot.save_figure
+    _check_options(draw, options, kind)
+    draw(packing, path, **options)
     return path
+
+
+def _check_options(function, options: dict, kind: str) -> None:
+    """Refuse options ``function`` does not take with one line naming those it does."""
+    import inspect
+
+    accepted = [name for name in inspect.signature(function).parameters if name not in ("packing", "packings", "path")]
+    unknown = sorted(set(options) - set(accepted))
+    if unknown:
+        raise ParameterError(
+            f"a {kind} picture has no option {', '.join(unknown)}; its options: {', '.join(accepted)}"
+        )
 
 
 def _check_suffix(path, allowed, what):

@@ -186,13 +186,14 @@ def test_render_and_info(saved_square, tmp_path):
 def test_render_a_3d_packing(tmp_path):
     out = tmp_path / "ball.npz"
     assert run("pack", "ball", "-n", "20", "--backend", "numpy", "--grid", "8", "-o", str(out), "-q").returncode == 0
-    result = run("render", str(out), "-o", str(tmp_path / "ball.png"), "--size", "120x100", "--view", "10,20",
-                 "--clip", "0,0,0,1,0,0")
+    result = run("render", str(out), "-o", str(tmp_path / "ball.png"), "--size", "120x100", "--view", "-10,-20",
+                 "--clip", "0,0,0,-1,0,0")  # negative numbers need no '='
     assert result.returncode == 0, result.stderr
     import matplotlib.image
 
     assert matplotlib.image.imread(tmp_path / "ball.png").shape[:2] == (100, 120)
     one_line_error(run("render", str(out), "--clip", "0,0,1"), "--clip needs 6")
+    one_line_error(run("render", str(out), "--kind", "fill", "--view", "10,20"), "--view", "fill plot")
 
 
 def test_backends_lists_every_backend_with_a_reason():
