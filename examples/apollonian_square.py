@@ -47,7 +47,8 @@ def main():
     ]
     print(f"{len(packing):,} circles, fill {packing.fill:.5f}, largest radius {packing.radii.max():.4f}, "
           f"smallest {packing.radii.min():.2e}")
-    print(f"{elapsed:.1f} s ({packing.params['backend']} backend, {len(packing.stats.count)} rounds), valid: {report.ok}")
+    rounds = len(packing.stats.count)
+    print(f"{elapsed:.1f} s ({packing.params['backend']} backend, {rounds} rounds), valid: {report.ok}")
     for path in files:
         print(f"wrote {path}")
 

@@ -37,9 +37,11 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--mesh", default=str(SHARED if SHARED.exists() else SMALL), help="mesh file to pack")
     parser.add_argument("-n", "--count", type=int, default=10_000, help="spheres to pack (default 10,000)")
-    parser.add_argument("--grid", type=int, default=None, help="grid cells along the longest side (default: about 32,768 cells)")
+    parser.add_argument("--grid", type=int, default=None,
+                        help="grid cells along the longest side (default: about 32,768 cells)")
     parser.add_argument("--backend", default=None, help="numpy, numba, numba-cuda or warp (default: the fastest here)")
-    parser.add_argument("--azimuth", type=float, default=210.0, help="camera azimuth in degrees (default 210: from the front, left)")
+    parser.add_argument("--azimuth", type=float, default=210.0,
+                        help="camera azimuth in degrees (default 210: from the front, left)")
     parser.add_argument("--size", type=int, default=800, help="picture width and height in pixels (default 800)")
     parser.add_argument("--name", default="armadillo", help="file name stem of the outputs (default armadillo)")
     parser.add_argument("--out", default="out", help="output folder (default ./out)")

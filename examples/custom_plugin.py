@@ -65,7 +65,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("-n", "--count", type=int, default=2000, help="spheres per packing (default 2,000)")
     parser.add_argument("--backend", default=None,
-                        help="backend of the scalar plug-in: numpy, numba, numba-cuda or warp (default: the fastest here)")
+                        help="backend of the scalar plug-in: numpy, numba, numba-cuda or warp "
+                        "(default: the fastest here)")
     parser.add_argument("--out", default="out", help="output folder (default ./out)")
     args = parser.parse_args()
     out = Path(args.out)
