@@ -396,3 +396,12 @@ def test_missing_framework_says_how_to_install(monkeypatch):
     monkeypatch.setattr(backends, "_instances", {})
     with pytest.raises(BackendError, match=r"pip install \"ndpack\[warp\]\""):
         backends.get_backend("warp")
+
+
+def test_a_missing_gpu_package_is_a_backend_error_and_auto_choice_goes_on(monkeypatch):
+    monkeypatch.setattr(backends, "_instances", {})
+    monkeypatch.setitem(sys.modules, "warp", None)  # import warp now raises ImportError
+    with pytest.raises(BackendError, match=r"backend 'warp' is not installed .*ndpack\[warp\]"):
+        backends.get_backend("warp")
+    assert "not installed" in backends.available()["warp"]
+    assert backends.get_backend(shape=nd.Box([0, 0], [1, 1])).name != "warp"

@@ -429,3 +429,78 @@ def test_the_nearest_feature_search_given_a_hint_or_a_bound_finds_the_same_featu
         assert 0 < farther.sum() < len(points)
         assert np.all(bounded[farther] == -2)
         np.testing.assert_array_equal(bounded[~farther], unhinted[~farther])
+
+
+# ---------------------------------------------------------------------- language rules
+def test_source_text_lines_count_blank_lines_and_comments():
+    from ndpack.kernels.language import Kernel
+
+    source = "def f(p, prm):\n\n    # a comment\n    x = p[0]\n\n    return sum(p) - x\n"
+    with pytest.raises(KernelError, match=r"^kernel 'f', line 6: unknown function 'sum'"):
+        Kernel(source)
+
+
+def test_operators_print_with_pythons_meaning():
+    """``//`` and ``%`` call Python-rounding helpers on Warp (numba already rounds as Python),
+    ``**`` is float ** float everywhere; the Warp program defines the helpers it calls, only those."""
+    from ndpack.kernels.language import Kernel
+    from ndpack.kernels.program import Program
+
+    kernel = Kernel(
+        "def f(p, prm):\n"
+        "    n = int(p[0])\n"
+        "    m = n % 3 + n // 2\n"
+        "    m %= 4\n"
+        "    x = p[1] % 2.5 + p[1] // 0.5\n"
+        "    k = n ** 2\n"
+        "    k **= 2\n"
+        "    return k + x + float(m) + 2 ** -1\n"
+    )
+    assert kernel.types["k"] == "float" and kernel.types["m"] == "int"  # ** gives floats
+    numba = kernel.render("numba", 2)
+    assert "n % 3 + n // 2" in numba and "m = m % 4" in numba and "float(n) ** float(2)" in numba
+    assert "k = k ** float(2)" in numba and "float(2) ** float(-1)" in numba
+    warp = kernel.render("warp", 2)
+    assert "nd_mod_i(n, 3) + nd_floordiv_i(n, 2)" in warp and "m = nd_mod_i(m, 4)" in warp
+    assert "nd_mod_f(p[1], wp.float64(2.5)) + nd_floordiv_f(p[1], wp.float64(0.5))" in warp
+    assert "k = wp.pow(k, wp.float64(2))" in warp and " % " not in warp and "//" not in warp
+    program = Program(2)
+    program.kernels["f"] = kernel
+    text = program.source("warp", "float32")
+    assert text.count("def nd_") == 4 and "def nd_mod_f(a: wp.float32, b: wp.float32)" in text
+    program.kernels["f"] = Kernel("def f(p, prm):\n    return float(int(p[0]) % 2)\n")
+    assert program.source("warp").count("def nd_") == 1
+    assert "def nd_" not in build(nd.Ball([0, 0], 1.0)).source("warp")
+
+
+def test_paths_without_return_and_constant_indices_are_refused():
+    from ndpack.kernels import library
+    from ndpack.kernels.language import Kernel
+
+    with pytest.raises(KernelError, match="line 3: a path through the function ends here without return"):
+        Kernel("def f(p, prm):\n    x = p[0]\n    if x > 0.0:\n        return x\n")
+    Kernel("def f(p, prm):\n    if p[0] > 0.0:\n        return 1.0\n    else:\n        return 2.0\n")
+    with pytest.raises(KernelError, match="ends here without return"):
+        Kernel("def f(p, prm):\n    while True:\n        if p[0] > 0.0:\n            break\n        return 1.0\n")
+    # Library kernels are checked when printed for a dimension: the torus reads p[2].
+    torus = Kernel(library.torus)
+    assert "p[2]" in torus.render("numba", 3)
+    with pytest.raises(KernelError, match=r"kernel 'torus', line \d+ of .*library.py: index 2 is out of range"):
+        torus.render("numba", 2)
+    with pytest.raises(KernelError, match="negative index -1"):
+        Kernel("def f(p, prm):\n    return p[-1]\n").render("warp", 3)
+
+
+def test_one_kernel_added_twice_is_one_and_another_of_its_name_is_numbered():
+    from ndpack.kernels.language import Kernel
+    from ndpack.kernels.program import Program
+
+    program = Program(2)
+    first = Kernel("def user_f(p, prm, o: int):\n    return p[0] - prm[o]\n")
+    same = Kernel("def user_f(p, prm, o: int):\n    return p[0] - prm[o]\n")
+    other = Kernel("def user_f(p, prm, o: int):\n    return p[1] - prm[o]\n")
+    assert [program.add_kernel(k) for k in (first, same, other, first, other)] == [
+        "user_f", "user_f", "user_f_2", "user_f", "user_f_2"]
+    text = program.source("numba")
+    assert "def user_f(" in text and "def user_f_2(p, prm, o):\n    return p[1] - prm[o]" in text
+    assert other.name == "user_f"  # the kernel added keeps its name; the program holds a renamed copy

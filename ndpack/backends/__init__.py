@@ -75,11 +75,10 @@ def _create(name: str, device=None, **options) -> Backend:
             if not number.isdigit():
                 raise BackendError(f"numba-cuda needs a CUDA device such as 'cuda:0', got {device!r}")
             kwargs["device"] = int(number)
-        try:
-            backend_class = getattr(importlib.import_module(module), cls)
+        try:  # the backends import their GPU package when made, not when their module loads
+            _instances[key] = getattr(importlib.import_module(module), cls)(**kwargs)
         except ImportError as error:
             raise BackendError(f"backend {name!r} is not installed ({error}); {hint}") from error
-        _instances[key] = backend_class(**kwargs)
     return _instances[key]
 
 

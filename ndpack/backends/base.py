@@ -179,12 +179,14 @@ def compiled_program(shape):
             program = build(shape)
         except KernelError as error:
             from ..errors import BackendError
+            from ..shapes.plugin import Function, tree
+            from ..shapes.scalar import ScalarFunction
 
-            raise BackendError(
-                f"{shape!r} cannot run on a compiled backend: {error}. Use backend='numpy', or "
-                "write the plug-in as a scalar function (ndpack.ScalarFunction) so it compiles "
-                "for every backend"
-            ) from None
+            numpy_only = any(isinstance(node, Function) and not isinstance(node, ScalarFunction)
+                             for node in tree(shape))
+            advice = ("Use backend='numpy', or write the plug-in as a scalar function (ndpack.ScalarFunction) "
+                      "so it compiles for every backend" if numpy_only else "Use backend='numpy'")
+            raise BackendError(f"{shape!r} cannot run on a compiled backend: {error}. {advice}") from None
         cached = (program, program.param_array())
         shape.__dict__["_ndpack_program"] = cached
     return cached

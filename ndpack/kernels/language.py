@@ -19,13 +19,25 @@ The subset
   new local point of length ``D``; ``stack()``, a new local array of :data:`STACK_DEPTH` ints
   (for tree traversals: ``s[i] = n``, ``n = s[i]``); calls of other kernel functions.
 - Not allowed: other globals, lists, tuples, strings, attributes, ``inf`` (use a large number).
+- Every path through the function ends in ``return``.
+
+Arithmetic means what it means in Python on every backend: ``//`` rounds down and ``%`` takes
+the sign of the divisor, for ints and floats alike (Warp's own operators follow C, so the Warp
+dialect calls the helpers of :func:`warp_prelude`); ``**`` always gives a float (as ``float(a)
+** float(b)``: ``2 ** -1`` is 0.5, ``2 ** 3`` is 8.0). A constant index of the point, of a
+``point()`` or of a ``stack()`` must lie in the array (checked when the kernel is printed, or
+when a scalar plug-in is made); other indices are not checked, so they must stay in range.
 
 Dialects
 --------
 ``"numba"``: for ``numba.njit``; ``point()`` is ``np.empty(D)``.
 ``"cuda"``: for ``numba.cuda.jit(device=True)``; ``point()`` is a local array.
 ``"warp"``: ``@wp.func`` with typed arguments; float constants and int operands in float
-arithmetic are cast explicitly (Warp does not promote), ``math.f`` becomes ``wp.f``.
+arithmetic are cast explicitly (Warp does not promote), ``math.f`` becomes ``wp.f``, ``a ** b``
+becomes ``wp.pow``, ``//`` and ``%`` call the helpers of :func:`warp_prelude`.
+
+Error messages name the function as written and the line in its file (for source text, the
+line counted from the ``def``).
 """
 
 from __future__ import annotations
@@ -34,6 +46,8 @@ import ast
 import copy
 import inspect
 import math
+import operator
+import re
 import textwrap
 
 from ..errors import KernelError
@@ -58,27 +72,112 @@ _COMPARE = (ast.Lt, ast.LtE, ast.Gt, ast.GtE, ast.Eq, ast.NotEq)
 
 
 def parse_function(fn) -> ast.FunctionDef:
-    """The AST of a Python function (or of source text holding one function)."""
+    """The AST of a Python function (or of source text holding one function).
+
+    For a function object the line numbers are those of its file, which the syntax tree keeps
+    in ``ndpack_file`` (None for source text, whose lines count from the ``def``); the name it
+    is reported by is kept in ``ndpack_label`` (a kernel may be renamed, the label stays). An
+    ``ast.FunctionDef`` is returned as it is.
+    """
+    if isinstance(fn, ast.FunctionDef):
+        return fn
+    filename, first = None, 1
     if isinstance(fn, str):
         source = fn
         where = "kernel source"
     else:
+        name = getattr(fn, "__name__", repr(fn))
+        if name == "<lambda>":
+            raise KernelError(
+                "a scalar kernel cannot be a lambda: define it with def (def f(p, params): ...) "
+                "in a file or notebook cell"
+            )
         try:
-            source = inspect.getsource(fn)
+            lines, first = inspect.getsourcelines(fn)
         except (OSError, TypeError) as error:
             raise KernelError(
-                f"cannot read the source of {getattr(fn, '__name__', fn)!r} ({error}); define scalar "
+                f"cannot read the source of {name!r} ({error}); define scalar "
                 "kernels with def in a file or notebook cell, not with lambda or exec"
             ) from None
-        where = f"{fn.__qualname__} ({inspect.getsourcefile(fn)})"
-    tree = ast.parse(textwrap.dedent(source))
+        source = "".join(lines)
+        filename = inspect.getsourcefile(fn) or inspect.getfile(fn)
+        where = f"{fn.__qualname__} ({filename})"
+    try:
+        tree = ast.parse(textwrap.dedent(source))
+    except SyntaxError as error:
+        raise KernelError(f"{where}: cannot parse its source ({error.msg})") from None
     functions = [node for node in tree.body if isinstance(node, ast.FunctionDef)]
     if len(functions) != 1:
         raise KernelError(f"{where}: expected exactly one function definition")
     function = functions[0]
+    if filename is not None:
+        ast.increment_lineno(function, max(first, 1) - 1)  # lines of the file
     function.decorator_list = []
     function.returns = None
+    function.ndpack_file = filename
+    function.ndpack_label = function.name
     return function
+
+
+def located_error(function: ast.FunctionDef, node: ast.AST, message: str) -> KernelError:
+    """A :class:`KernelError` naming ``function`` as its author wrote it and the line of ``node``."""
+    line = getattr(node, "lineno", None) or function.lineno
+    filename = getattr(function, "ndpack_file", None)
+    where = f"line {line} of {filename}" if filename else f"line {line - function.lineno + 1}"
+    return KernelError(
+        f"kernel {_label(function)!r}, {where}: {message} (see ndpack.kernels.language for the supported subset)"
+    )
+
+
+def _label(function: ast.FunctionDef) -> str:
+    """The function's name as its author wrote it (kept when a kernel is renamed)."""
+    return getattr(function, "ndpack_label", function.name)
+
+
+_FOLD = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.FloorDiv: operator.floordiv,
+         ast.Mod: operator.mod}
+
+
+def constant_int(node: ast.AST, dim: int):
+    """The value of an int expression made of constants and ``D`` (= ``dim``), else None."""
+    if isinstance(node, ast.Constant):
+        return node.value if type(node.value) is int else None
+    if isinstance(node, ast.Name):
+        return dim if node.id == "D" else None
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        value = constant_int(node.operand, dim)
+        if value is None:
+            return None
+        return -value if isinstance(node.op, ast.USub) else value
+    if isinstance(node, ast.BinOp) and type(node.op) in _FOLD:
+        left, right = constant_int(node.left, dim), constant_int(node.right, dim)
+        if left is None or right is None or (right == 0 and isinstance(node.op, (ast.FloorDiv, ast.Mod))):
+            return None
+        return _FOLD[type(node.op)](left, right)
+    return None
+
+
+def _always_returns(statements) -> bool:
+    """Whether every path through ``statements`` ends in ``return`` (or loops for ever)."""
+    for statement in statements:
+        if isinstance(statement, ast.Return):
+            return True
+        if isinstance(statement, ast.If) and _always_returns(statement.body) and _always_returns(statement.orelse):
+            return True
+        if (isinstance(statement, ast.While) and isinstance(statement.test, ast.Constant)
+                and statement.test.value and not _breaks(statement.body)):  # while True, while 1
+            return True
+    return False
+
+
+def _breaks(statements) -> bool:
+    """Whether a ``break`` in ``statements`` (not in a loop inside them) leaves their loop."""
+    for statement in statements:
+        if isinstance(statement, ast.Break):
+            return True
+        if isinstance(statement, ast.If) and (_breaks(statement.body) or _breaks(statement.orelse)):
+            return True
+    return False
 
 
 class Signature:
@@ -87,13 +186,11 @@ class Signature:
     def __init__(self, function: ast.FunctionDef):
         args = function.args
         if args.vararg or args.kwarg or args.kwonlyargs or args.defaults or args.posonlyargs:
-            raise KernelError(
-                f"kernel {function.name!r}: only plain positional arguments are allowed"
-            )
+            raise KernelError(f"kernel {_label(function)!r}: only plain positional arguments are allowed")
         names = [a.arg for a in args.args]
         if len(names) < 2:
             raise KernelError(
-                f"kernel {function.name!r} must take at least (p, prm): the point and the parameters"
+                f"kernel {_label(function)!r} must take at least (p, prm): the point and the parameters"
             )
         self.names = names
         self.types = [POINT, ARRAY]
@@ -101,17 +198,20 @@ class Signature:
             kind = getattr(a.annotation, "id", None)
             if kind not in (INT, FLOAT):
                 raise KernelError(
-                    f"kernel {function.name!r}: argument {a.arg!r} needs an annotation, int or float"
+                    f"kernel {_label(function)!r}: argument {a.arg!r} needs an annotation, int or float"
                 )
             self.types.append(kind)
 
 
 def _fail(function: ast.FunctionDef, node: ast.AST, message: str):
-    line = getattr(node, "lineno", function.lineno)
-    raise KernelError(
-        f"kernel {function.name!r}, line {line - function.lineno + 1}: {message} "
-        "(see ndpack.kernels.language for the supported subset)"
-    )
+    raise located_error(function, node, message)
+
+
+def _arithmetic_kind(op: ast.operator, kinds) -> str:
+    """The type of ``a op b`` for operands of types ``kinds``: ``/`` and ``**`` give floats."""
+    if isinstance(op, (ast.Div, ast.Pow)) or FLOAT in kinds:
+        return FLOAT
+    return INT
 
 
 class _Checker(ast.NodeVisitor):
@@ -137,13 +237,19 @@ class _Checker(ast.NodeVisitor):
             for statement in body:
                 self.statement(statement)
             if not self.changed:
-                return self.types
+                break
+        if not _always_returns(body):
+            last = body[-1] if body else self.function
+            self.fail(last, "a path through the function ends here without return; every path must "
+                      "return a number (add a return at the end, or an else that returns)")
         return self.types
 
     # ---------------------------------------------------------------- statements
     def assign_name(self, node, name, kind):
         if name == "D" or name in self.signature.names[:2]:
             self.fail(node, f"cannot assign to {name!r}")
+        if name in _WARP_HELPERS:
+            self.fail(node, f"the name {name!r} is reserved")
         old = self.types.get(name)
         if old in _ARRAYS or kind in _ARRAYS:
             if old is not None and old != kind:
@@ -171,11 +277,11 @@ class _Checker(ast.NodeVisitor):
                 current = self.types.get(node.target.id)
                 if current is None:
                     self.fail(node, f"{node.target.id!r} is used before it is assigned")
-                if isinstance(node.op, ast.Div):
-                    kind = FLOAT
-                self.assign(node, node.target, kind)
-            else:
-                self.assign(node, node.target, kind)
+                kind = _arithmetic_kind(node.op, {current if current in (INT, FLOAT) else FLOAT, kind})
+            elif isinstance(node.target, ast.Subscript) and isinstance(node.target.value, ast.Name):
+                element = INT if self.types.get(node.target.value.id) == STACK else FLOAT
+                kind = _arithmetic_kind(node.op, {element, kind})
+            self.assign(node, node.target, kind)
         elif isinstance(node, ast.For):
             if node.orelse:
                 self.fail(node, "for ... else is not supported")
@@ -276,9 +382,7 @@ class _Checker(ast.NodeVisitor):
             kinds = {self.expr(node.left), self.expr(node.right)}
             if not kinds <= {INT, FLOAT}:
                 self.fail(node, "arithmetic needs numbers")
-            if isinstance(node.op, ast.Div) or FLOAT in kinds:
-                return FLOAT
-            return INT
+            return _arithmetic_kind(node.op, kinds)
         if isinstance(node, ast.UnaryOp):
             if not isinstance(node.op, _UNARY):
                 self.fail(node, f"operator {type(node.op).__name__} is not supported")
@@ -349,8 +453,10 @@ class Kernel:
 
     Parameters
     ----------
-    fn : function or str
-        A Python function in the subset, or the source text of one.
+    fn : function, str or ast.FunctionDef
+        A Python function in the subset, the source text of one, or its syntax tree (as
+        :func:`parse_function` gives it: a scalar plug-in's, rewritten, keeps the lines of the
+        user's file).
     callees : iterable of str
         Names of other kernel functions it may call.
     """
@@ -364,6 +470,113 @@ class Kernel:
     def render(self, dialect: str, dim: int, float_name: str = "float64") -> str:
         """Source text in ``dialect`` ("numba", "cuda" or "warp") for dimension ``dim``."""
         return render(self, dialect, dim, float_name)
+
+    def renamed(self, name: str) -> Kernel:
+        """The same kernel under another name (its messages keep the author's name)."""
+        other = copy.copy(self)
+        other.function = copy.deepcopy(self.function)
+        other.function.name = other.name = name
+        return other
+
+    def same_code(self, other: Kernel) -> bool:
+        """Whether ``other`` is this kernel's code, whatever either is named."""
+        return self._code == other._code
+
+    @property
+    def _code(self) -> str:
+        """Its arguments and body, without the name (and without line numbers)."""
+        code = self.__dict__.get("_code_text")
+        if code is None:
+            code = self.__dict__["_code_text"] = ast.dump(self.function.args) + ast.dump(ast.Module(self.function.body, []))
+        return code
+
+    def check_indices(self, dim: int) -> None:
+        """Refuse constant indices outside the point, a ``point()`` or a ``stack()`` in ``dim`` dimensions.
+
+        Raises
+        ------
+        KernelError
+            Naming the line, for ``p[D]``, ``p[2]`` in 2-D, ``p[-1]`` or ``s[64]`` of a stack.
+        """
+        point = self.signature.names[0]
+        for node in ast.walk(self.function):
+            if not (isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name)):
+                continue
+            name = node.value.id
+            kind = self.types.get(name)
+            if kind not in (POINT, STACK):
+                continue
+            index = constant_int(node.slice, dim)
+            if index is None:
+                continue
+            length = dim if kind == POINT else STACK_DEPTH
+            what = (f"the point {name!r} has D = {dim} coordinates" if name == point else
+                    f"the local point {name!r} has D = {dim} entries" if kind == POINT else
+                    f"the stack {name!r} has {STACK_DEPTH} entries")
+            if index < 0:
+                last = f" (write {name}[D - 1] for the last)" if kind == POINT else ""
+                _fail(self.function, node, f"negative index {index}: indices count from 0; {what}, "
+                      f"{name}[0] to {name}[{length - 1}]{last}")
+            if index >= length:
+                _fail(self.function, node, f"index {index} is out of range: {what}, {name}[0] to "
+                      f"{name}[{length - 1}]")
+
+
+#: Functions the Warp dialect calls for Python's ``//`` and ``%`` (Warp's ``%`` follows C, and
+#: its float ``//`` is ``floor(a / b)``, which is not Python's ``1.0 // 0.1 == 9.0``). The float
+#: ones are CPython's ``float_divmod``; ``F`` is the float type. Ints divided by zero give 0 here
+#: (C would stop the program), floats NaN or infinity.
+_WARP_HELPERS = {
+    "nd_floordiv_i": """@wp.func
+def nd_floordiv_i(a: int, b: int):
+    if b == 0:
+        return 0
+    q = a / b
+    if a % b != 0 and (a < 0) != (b < 0):
+        q = q - 1
+    return q
+""",
+    "nd_mod_i": """@wp.func
+def nd_mod_i(a: int, b: int):
+    if b == 0:
+        return 0
+    m = a % b
+    if m != 0 and (m < 0) != (b < 0):
+        m = m + b
+    return m
+""",
+    "nd_floordiv_f": """@wp.func
+def nd_floordiv_f(a: F, b: F):
+    m = wp.mod(a, b)
+    d = (a - m) / b
+    if m != F(0.0):
+        if (b < F(0.0)) != (m < F(0.0)):
+            d = d - F(1.0)
+    if d != F(0.0):
+        q = wp.floor(d)
+        if d - q > F(0.5):
+            q = q + F(1.0)
+        return q
+    return F(0.0) * (a / b)
+""",
+    "nd_mod_f": """@wp.func
+def nd_mod_f(a: F, b: F):
+    m = wp.mod(a, b)
+    if m != F(0.0):
+        if (b < F(0.0)) != (m < F(0.0)):
+            m = m + b
+    else:
+        m = F(0.0) * b
+    return m
+""",
+}
+
+
+def warp_prelude(float_name: str, text: str) -> str:
+    """The Warp helpers that ``text`` (kernels printed in the Warp dialect) calls, to go before it."""
+    used = [re.sub(r"\bF\b", f"wp.{float_name}", source) for name, source in _WARP_HELPERS.items()
+            if f"{name}(" in text]
+    return "\n\n".join(used) + "\n\n" if used else ""
 
 
 # -------------------------------------------------------------------- printers
@@ -408,13 +621,26 @@ class _Printer(ast.NodeTransformer):
     def visit_Attribute(self, node):  # math.pi, math.e
         return self.visit_Constant(ast.Constant(MATH_CONSTANTS[node.attr]))
 
+    def float_operand(self, original):
+        """``original`` printed and, if an int, made a float in every dialect (for ``**``)."""
+        printed = self.visit(original)
+        if self.kind(original) != INT:
+            return printed
+        return self.to_float(printed) if self.warp else ast.Call(ast.Name("float"), [printed], [])
+
     def visit_BinOp(self, node):
+        if isinstance(node.op, ast.Pow):  # always float ** float, as Python's pow(float, float)
+            left, right = self.float_operand(node.left), self.float_operand(node.right)
+            if self.warp:
+                return ast.Call(ast.Attribute(ast.Name("wp"), "pow"), [left, right], [])
+            return ast.BinOp(left, ast.Pow(), right)
         mixed = self.kind(node) == FLOAT
         left = self.printed_float(node.left) if mixed else self.visit(node.left)
         right = self.printed_float(node.right) if mixed else self.visit(node.right)
-        if self.warp and isinstance(node.op, ast.Pow):
-            if mixed:
-                return ast.Call(ast.Attribute(ast.Name("wp"), "pow"), [left, right], [])
+        if self.warp and isinstance(node.op, (ast.FloorDiv, ast.Mod)):
+            # Numba follows Python; Warp's % follows C: call the helpers of warp_prelude.
+            helper = ("nd_floordiv_" if isinstance(node.op, ast.FloorDiv) else "nd_mod_") + ("f" if mixed else "i")
+            return ast.Call(ast.Name(helper), [left, right], [])
         return ast.BinOp(left, node.op, right)
 
     def visit_Compare(self, node):
@@ -482,6 +708,17 @@ class _Printer(ast.NodeTransformer):
 
     def visit_AugAssign(self, node):
         target = node.target
+        if isinstance(node.op, (ast.FloorDiv, ast.Mod, ast.Pow)):
+            # x op= e as x = x op e, so that it prints as the operator does (a helper, a cast).
+            current = copy.deepcopy(target)
+            current.ctx = ast.Load()
+            if isinstance(target, ast.Name):
+                current.kind = self.types[target.id]
+            else:
+                current.kind = INT if self.types.get(target.value.id) == STACK else FLOAT
+            value = ast.BinOp(current, node.op, node.value)
+            value.kind = _arithmetic_kind(node.op, {current.kind, self.kind(node.value)})
+            return self.visit_Assign(ast.Assign([target], value))
         if self.warp and isinstance(target, ast.Name) and self.types.get(target.id) == FLOAT:
             value = self.printed_float(node.value)
         else:
@@ -508,6 +745,7 @@ def render(kernel: Kernel, dialect: str, dim: int, float_name: str = "float64") 
     """Source text of a checked kernel in ``dialect`` for dimension ``dim``."""
     if dialect not in ("numba", "cuda", "warp"):
         raise ValueError(f"unknown dialect {dialect!r}")
+    kernel.check_indices(dim)
     printed = _Printer(dialect, dim, kernel.types, float_name).visit(copy.deepcopy(kernel.function))
     annotations = {POINT: "Any", ARRAY: f"wp.array(dtype=wp.{float_name})", INT: "int",
                    FLOAT: f"wp.{float_name}"}

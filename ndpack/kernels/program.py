@@ -17,7 +17,7 @@ import textwrap
 import numpy as np
 
 from ..errors import KernelError
-from .language import Kernel
+from .language import Kernel, warp_prelude
 
 #: Name of the entry function every compiled module exposes.
 ENTRY = "sd"
@@ -134,11 +134,21 @@ class Program:
         return name
 
     def add_kernel(self, kernel: Kernel) -> str:
-        """Add an already checked kernel (a user's plug-in); returns its name."""
-        if kernel.name in self.kernels and self.kernels[kernel.name] is not kernel:
-            raise KernelError(f"two kernels are named {kernel.name!r}; rename one")
-        self.kernels[kernel.name] = kernel
-        return kernel.name
+        """Add an already checked kernel (a user's plug-in); returns the name to call it by.
+
+        Its code is added once, however many shapes use it (one function made into several
+        scalar plug-ins with other parameters: each reads its own through its offset). Another
+        function under a name already taken (two functions ``f`` of two modules) is added under
+        a numbered name, ``user_f_2``.
+        """
+        name, number = kernel.name, 1
+        while name in self.kernels:
+            if self.kernels[name] is kernel or self.kernels[name].same_code(kernel):
+                return name
+            number += 1
+            name = f"{kernel.name}_{number}"
+        self.kernels[name] = kernel if name == kernel.name else kernel.renamed(name)
+        return name
 
     def shape(self, oracle) -> str:
         """Name of the distance function of ``oracle`` (a child in a CSG tree), added once."""
@@ -155,7 +165,10 @@ class Program:
         """All functions in ``dialect``, then ``sd(p, prm)`` calling the shape's entry."""
         parts = [self.warp_natives[name] if dialect == "warp" and float_name == "float32" and name in self.warp_natives
                  else kernel.render(dialect, self.dim, float_name) for name, kernel in self.kernels.items()]
-        return "\n\n\n".join(parts) + "\n"
+        text = "\n\n\n".join(parts) + "\n"
+        if dialect == "warp":  # the helpers that give // and % Python's meaning
+            text = warp_prelude(float_name, text) + text
+        return text
 
     @property
     def key(self) -> str:

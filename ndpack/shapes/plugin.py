@@ -243,17 +243,17 @@ def check_plugin_slopes(shape) -> None:
     it (it asks the same function), so :func:`ndpack.pack` checks before packing. The result is
     kept on the plug-in: packing it again costs nothing.
     """
-    for node in _tree(shape):
+    for node in tree(shape):
         if isinstance(node, Function) and not getattr(node, "_slope_checked", False):
             node.check_lipschitz()
             node._slope_checked = True
 
 
-def _tree(shape):
+def tree(shape):
     """``shape`` and every shape below it (CSG nodes keep theirs in ``children``, ``child`` or ``a``/``b``)."""
     yield shape
     below = list(getattr(shape, "children", ()))
     below += [getattr(shape, name) for name in ("child", "a", "b") if hasattr(shape, name)]
     for part in below:
         if isinstance(part, Oracle):  # Capsule's a and b are points, not shapes
-            yield from _tree(part)
+            yield from tree(part)

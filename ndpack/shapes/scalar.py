@@ -25,15 +25,22 @@ import ast
 import numpy as np
 
 from ..errors import KernelError, OracleError
-from ..kernels.language import Kernel, parse_function
+from ..kernels.language import Kernel, constant_int, located_error, parse_function
 from .plugin import Function
 
 
-def _with_offset(fn, prefix="user_") -> str:
-    """Source of ``fn(p, params)`` as a library-style kernel ``user_fn(p, prm, o: int)``.
+def _with_offset(fn, prefix="user_"):
+    """``fn(p, params)`` as the syntax tree of a library-style kernel ``user_fn(p, prm, o: int)``.
 
     Every ``params[e]`` becomes ``prm[o + e]``, so the user's parameters can sit anywhere in a
-    program's flat parameter array.
+    program's flat parameter array. The tree keeps the line numbers of the user's file and the
+    function's own name for messages (:func:`~ndpack.kernels.language.parse_function`).
+
+    Returns
+    -------
+    function : ast.FunctionDef
+    params : list of (ast.Subscript, ast.expr)
+        Every ``params[e]`` (rewritten) with its index ``e`` as the user wrote it.
     """
     function = parse_function(fn)
     args = function.args.args
@@ -44,31 +51,42 @@ def _with_offset(fn, prefix="user_") -> str:
         )
     params_name = args[1].arg
     point_name = args[0].arg
+    indexed = []
 
     class Rewrite(ast.NodeTransformer):
         def visit_Subscript(self, node):
             if isinstance(node.value, ast.Name) and node.value.id == params_name:
+                index = self.visit(node.slice)
                 node.value = ast.Name("prm", ast.Load())
-                node.slice = ast.BinOp(ast.Name("o", ast.Load()), ast.Add(), self.visit(node.slice))
+                node.slice = ast.BinOp(ast.Name("o", ast.Load()), ast.Add(), index)
+                indexed.append((node, index))
                 return node
             self.generic_visit(node)
             return node
 
         def visit_Name(self, node):
             if node.id in ("prm", "o") and node.id not in (params_name, point_name):
-                raise KernelError(f"{function.name!r}: the names 'prm' and 'o' are reserved in plug-ins")
+                raise located_error(function, node, "the names 'prm' and 'o' are reserved in plug-ins")
             if node.id == params_name:
-                raise KernelError(
-                    f"{function.name!r}: use the parameters only by index, params[i] (line "
-                    f"{node.lineno - function.lineno + 1})"
-                )
+                raise located_error(function, node, "use the parameters only by index, params[i]")
             return node
 
     function = Rewrite().visit(function)
     function.name = prefix + function.name
     function.args.args = [ast.arg(point_name), ast.arg("prm"), ast.arg("o", ast.Name("int", ast.Load()))]
     ast.fix_missing_locations(function)
-    return ast.unparse(function)
+    return function, indexed
+
+
+def _check_params(function, indexed, dim: int, count: int) -> None:
+    """Refuse a constant ``params[e]`` outside the ``count`` parameters (``e`` may use ``D``)."""
+    for node, index in indexed:
+        value = constant_int(index, dim)
+        if value is None or 0 <= value < count:
+            continue
+        have = (f"there are {count} params, params[0] to params[{count - 1}]" if count > 1 else
+                "there is 1 param, params[0]" if count else "there are no params (pass them as params=[...])")
+        raise located_error(function, node, f"params[{value}] is out of range: {have}")
 
 
 class ScalarFunction(Function):
@@ -91,7 +109,13 @@ class ScalarFunction(Function):
     Raises
     ------
     KernelError
-        If ``fn`` uses something outside the kernel language; the message names the line.
+        If ``fn`` uses something outside the kernel language, or a constant index outside
+        ``p`` (``0 .. dim - 1``) or ``params``; the message names the line of ``fn``'s file.
+
+    Notes
+    -----
+    Several instances of one function (other ``params``) share one compiled kernel, also in
+    one CSG tree; each reads its own parameters.
     """
 
     def __init__(self, fn, dim, bounds, params=(), exact_inside=False, exact_outside=False, name=None):
@@ -104,12 +128,15 @@ class ScalarFunction(Function):
         if not np.all(np.isfinite(values)):
             raise OracleError(f"params must be finite, got {values.tolist()}")
         self.params = values
-        self.kernel = Kernel(_with_offset(fn))
+        function, indexed = _with_offset(fn)
+        self.kernel = Kernel(function)
         self.scalar_fn = fn
         super().__init__(
             self._evaluate, dim, bounds, exact_inside=exact_inside, exact_outside=exact_outside,
             name=name or fn.__name__,
         )
+        self.kernel.check_indices(self.dim)
+        _check_params(self.kernel.function, indexed, self.dim, values.size)
         self.__doc__ = fn.__doc__ or type(self).__doc__
 
     def _evaluate(self, points):
