@@ -7,6 +7,7 @@ Every mistake in the input ends in one line on stderr and a non-zero exit: 2 for
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import sys
 import time
@@ -357,6 +358,9 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("ndpack: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # `ndpack info x.npz | head`: the reader left; say nothing more
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
 
 
 def _one_line(error) -> str:

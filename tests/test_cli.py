@@ -181,6 +181,11 @@ def test_render_and_info(saved_square, tmp_path):
     assert result.returncode == 0, result.stderr
     assert "60 in 2-D" in result.stdout and "median" in result.stdout and "source: square" in result.stdout
     one_line_error(run("info", str(tmp_path / "nothing.npz")), "no such")
+    # `ndpack info x.npz | head -1`: the reader leaves early; no traceback.
+    reader_gone = subprocess.Popen([sys.executable, "-m", "ndpack.cli", "info", str(saved_square)],
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    reader_gone.stdout.close()
+    assert reader_gone.wait(timeout=300) == 141 and b"Traceback" not in reader_gone.stderr.read()
 
 
 def test_render_a_3d_packing(tmp_path):
