@@ -70,8 +70,9 @@ def main():
         rows.append(row)
     largest = max(row["largest"] for row in rows)
     corner_gap = SPACING / math.sqrt(2) - RADIUS
-    print(f"largest radius {largest:.6f} (the corner gap: {corner_gap:.6f}); all valid: "
-          f"{all(row['valid_against_numpy'] for row in rows)}; all equal: {all(row['radii_equal_first'] for row in rows)}")
+    valid = all(row["valid_against_numpy"] for row in rows)
+    equal = all(row["radii_equal_first"] for row in rows)
+    print(f"largest radius {largest:.6f} (the corner gap: {corner_gap:.6f}); all valid: {valid}; all equal: {equal}")
     assert math.isclose(largest, corner_gap, rel_tol=1e-3), "the largest sphere should fill a corner gap"
     if args.out:
         write_json(Path(args.out), dict(machine=machine_info(), distance_gap=gap, runs=rows))

@@ -51,14 +51,8 @@ def plot_fill(runs, path, machine=""):
             ax.annotate(f"a = {fitted:.3f} (theory {theory:.3f})" if fitted else f"theory {theory:.3f}",
                         (xs[0], end_uncovered * 100**theory), textcoords="offset points", xytext=(0, -22), fontsize=8,
                         color=line.get_color())
-    ax.set_xlabel("spheres")
-    ax.set_ylabel("uncovered fraction 1 - fill")
-    ax.set_title(f"Fast mode: fill against count{machine} (dashed: the Apollonian slope)", fontsize=10)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    finish(fig, ax, path, "uncovered fraction 1 - fill",
+           f"Fast mode: fill against count{machine} (dashed: the Apollonian slope)")
 
 
 def plot_time(runs, path, machine=""):
@@ -68,9 +62,14 @@ def plot_time(runs, path, machine=""):
         seconds = np.asarray(run["curve"]["seconds"])
         keep = count >= 1000
         ax.loglog(count[keep], seconds[keep], label=run["label"])
+    finish(fig, ax, path, "seconds since nd.pack started (compile apart)", f"Fast mode: time to each count{machine}")
+
+
+def finish(fig, ax, path, ylabel, title):
+    """Label a log-log plot against the sphere count, and save it."""
     ax.set_xlabel("spheres")
-    ax.set_ylabel("seconds since nd.pack started (compile apart)")
-    ax.set_title(f"Fast mode: time to each count{machine}", fontsize=10)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()

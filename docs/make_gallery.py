@@ -2,6 +2,7 @@
 
     python docs/make_gallery.py                      # numba backend, about 3 minutes on 2 cores
     python docs/make_gallery.py --backend warp
+    python docs/make_gallery.py --out /tmp/gallery --max-spheres 100   # a quick check (the tests)
 
 Every packing uses seed 0 and the fast mode, and is verified before it is drawn. The cow comes
 from /work/shared/data/meshes/cow.obj when it is there, else from tests/data/meshes/cow.ply
@@ -27,7 +28,9 @@ import ndpack.plot  # noqa: E402
 import ndpack.render  # noqa: E402
 from ndpack.builtin import from_spec  # noqa: E402
 
-IMAGES = HERE / "img" / "gallery"
+IMAGES = HERE / "img" / "gallery"  # main() points it under --out
+#: The most spheres any packing gets (--max-spheres); None: as written below.
+MAX_SPHERES = None
 COW = Path("/work/shared/data/meshes/cow.obj")
 COW_SMALL = ROOT / "tests" / "data" / "meshes" / "cow.ply"
 SIZE = 600  # pixels, width and height
@@ -60,7 +63,7 @@ def entry(file, title, caption, code):
 
 def packed(shape, n, backend, label):
     started = time.perf_counter()
-    packing = nd.pack(shape, n=n, mode="fast", seed=0, backend=backend)
+    packing = nd.pack(shape, n=min(n, MAX_SPHERES or n), mode="fast", seed=0, backend=backend)
     report = packing.verify()
     if not report.ok:
         raise SystemExit(f"{label}: the packing failed verification: {report.summary()}")
@@ -72,7 +75,11 @@ def packed(shape, n, backend, label):
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--backend", default="numba", help="backend for every packing (default numba)")
+    parser.add_argument("--out", type=Path, default=HERE, help="folder of gallery.md and img/gallery/ (default docs/)")
+    parser.add_argument("--max-spheres", type=int, default=None, help="at most this many spheres a packing")
     args = parser.parse_args(argv)
+    global IMAGES, MAX_SPHERES
+    IMAGES, MAX_SPHERES = args.out / "img" / "gallery", args.max_spheres
     IMAGES.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
     backend = args.backend
@@ -164,11 +171,11 @@ ndpack.render.render(ball4, "ball4d_3d.png", size=(600, 600), at=[0, 0, 0, 0.3])
 ndpack.plot.save_fill_figure([square, ring, demo, cow, ball4], "fill.png", labels=[...])
 """)
 
-    write_markdown(HERE / "gallery.md", backend)
+    write_markdown(args.out / "gallery.md", backend)
     elapsed = time.perf_counter() - started
     for path in sorted(IMAGES.glob("*.png")):
-        print(f"{path.relative_to(ROOT)}: {path.stat().st_size / 1e3:.0f} kB")
-    print(f"wrote {HERE / 'gallery.md'} in {elapsed:.0f} s")
+        print(f"{path}: {path.stat().st_size / 1e3:.0f} kB")
+    print(f"wrote {args.out / 'gallery.md'} in {elapsed:.0f} s")
     return 0
 
 

@@ -159,12 +159,15 @@ def test_messages_give_the_line_in_the_users_file(tmp_path):
 @pytest.mark.parametrize(
     "body, message",
     [
-        ("return p[2]", "line 5 of .*index 2 is out of range: the point 'p' has D = 2 coordinates, p\\[0\\] to p\\[1\\]"),
+        ("return p[2]",
+         "line 5 of .*index 2 is out of range: the point 'p' has D = 2 coordinates, p\\[0\\] to p\\[1\\]"),
         ("return p[D]", "index 2 is out of range"),
         ("return p[-1]", "negative index -1: .*write p\\[D - 1\\]"),
-        ("return p[0] + params[2]", "params\\[2\\] is out of range: there are 2 params, params\\[0\\] to params\\[1\\]"),
+        ("return p[0] + params[2]",
+         "params\\[2\\] is out of range: there are 2 params, params\\[0\\] to params\\[1\\]"),
         ("return p[0] + params[-1]", "params\\[-1\\] is out of range"),
-        ("q = point()\n    q[D - 1 + 1] = 1.0\n    return q[0]", "line 6 of .*index 2 is out of range: the local point 'q'"),
+        ("q = point()\n    q[D - 1 + 1] = 1.0\n    return q[0]",
+         "line 6 of .*index 2 is out of range: the local point 'q'"),
         ("s = stack()\n    s[64] = 1\n    return 0.0", "index 64 is out of range: the stack 's' has 64 entries"),
         ("if p[0] > 0.0:\n        return 1.0", "line 5 of .*ends here without return; every path must return a number"),
         ("for i in range(D):\n        return p[i]", "ends here without return"),

@@ -487,7 +487,8 @@ class Kernel:
         """Its arguments and body, without the name (and without line numbers)."""
         code = self.__dict__.get("_code_text")
         if code is None:
-            code = self.__dict__["_code_text"] = ast.dump(self.function.args) + ast.dump(ast.Module(self.function.body, []))
+            code = ast.dump(self.function.args) + ast.dump(ast.Module(self.function.body, []))
+            self.__dict__["_code_text"] = code
         return code
 
     def check_indices(self, dim: int) -> None:
