@@ -322,9 +322,14 @@ def _radius_histogram(radii, bins: int = 8, width: int = 40) -> None:
 def _backends(args) -> int:
     from .backends import available
 
+    from .kernels.compile import cache_folder
+
     status = available()
     for name, state in status.items():
         print(f"{name:11s} {state}")
+    folder = cache_folder("numba").parent
+    size = sum(path.stat().st_size for path in folder.rglob("*") if path.is_file())
+    print(f"\ncompiled kernels are kept in {folder} ({size / 1e6:.1f} MB); deleting it is safe")
     return 0 if any(s.startswith("ok") for s in status.values()) else 1
 
 

@@ -204,9 +204,11 @@ def test_render_a_3d_packing(tmp_path):
 def test_backends_lists_every_backend_with_a_reason():
     result = run("backends")
     assert result.returncode == 0, result.stderr
-    lines = result.stdout.strip().splitlines()
+    table, cache = result.stdout.strip().split("\n\n")
+    lines = table.splitlines()
     assert [line.split()[0] for line in lines] == nd.backends.names()
     assert lines[0].split()[1] == "ok"  # numpy always works
+    assert cache.startswith("compiled kernels are kept in ") and " MB)" in cache
 
 
 def test_every_subcommand_has_help_with_examples():

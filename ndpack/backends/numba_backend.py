@@ -75,7 +75,7 @@ def _jit(namespace, names):
 
     for name in names:
         parallel = name in ENTRY_NAMES
-        namespace[name] = numba.njit(parallel=parallel, cache=False)(namespace[name])
+        namespace[name] = numba.njit(parallel=parallel, cache=True)(namespace[name])
     namespace["prange"] = numba.prange
 
 

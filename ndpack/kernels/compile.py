@@ -1,14 +1,17 @@
 """Compile a kernel program for Numba (CPU or CUDA) or Warp, cached by its structure.
 
-Numba: the program's functions are executed into one namespace and each is replaced by its
-jitted dispatcher, so calls between them resolve to compiled code; the backend's own kernels
-(text of the same dialect) join that namespace. Warp reads the source of the functions it
-compiles, so the program and the backend's kernels are written to one file in a cache folder
-and imported from there.
+Numba: the program's functions and the backend's own kernels (text of the same dialect) share
+one namespace, and each function is replaced by its jitted dispatcher, so calls between them
+resolve to compiled code. For the CPU that namespace is a module written to the cache folder and
+imported, so Numba can keep the machine code on disk (``cache=True``) and a new process loads it
+in a fraction of a second instead of compiling for 10-20 s; Numba's cache needs a source file.
+Warp reads the source of the functions it compiles, so its modules are files there as well.
+Files are named by a hash of their text, so a changed program never meets a stale binary.
 """
 
 from __future__ import annotations
 
+import ast
 import hashlib
 import importlib.util
 import math
@@ -22,15 +25,43 @@ import numpy as np
 from .language import STACK_DEPTH
 
 _numba_cache: dict[tuple, dict] = {}
-_warp_cache: dict[str, object] = {}
+_warp_cache: dict[str, object] = {}  # module text -> module
 
 
-def cache_folder() -> Path:
-    """Where generated Warp modules are written: ``$NDPACK_CACHE`` or ``~/.cache/ndpack``."""
+def cache_folder(kind: str = "warp") -> Path:
+    """Where generated modules of ``kind`` ("warp" or "numba") are written.
+
+    ``$NDPACK_CACHE`` or ``~/.cache/ndpack``; the system's temporary folder where that cannot be
+    written (a read-only home), so compiling still works, only without keeping the code.
+    """
     root = os.environ.get("NDPACK_CACHE") or os.path.join(os.path.expanduser("~"), ".cache", "ndpack")
-    folder = Path(root) / "warp"
-    folder.mkdir(parents=True, exist_ok=True)
-    return folder
+    for base in (Path(root), Path(tempfile.gettempdir()) / "ndpack-cache"):
+        folder = base / kind
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError:
+            continue
+        if os.access(folder, os.W_OK):
+            return folder
+    raise OSError(f"no writable folder for compiled kernels: set NDPACK_CACHE to one ({root} is not)")
+
+
+def _import_generated(text: str, kind: str):
+    """``text`` written to the cache folder under a name from its hash, and imported as a module."""
+    digest = hashlib.sha1(text.encode()).hexdigest()[:20]
+    path = cache_folder(kind) / f"ndpack_{digest}.py"
+    # Rewrite only a missing or different file: Numba's disk cache is tied to the file's time.
+    if not path.exists() or path.read_text() != text:
+        # Write then rename, so a concurrent process never imports half a file.
+        with tempfile.NamedTemporaryFile("w", dir=path.parent, suffix=".tmp", delete=False) as handle:
+            handle.write(text)
+        os.replace(handle.name, path)
+    name = f"ndpack_generated_{kind}_{digest}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
 
 
 def numba_namespace(program, target: str, kernels: str, constants: dict, jit_kernels) -> dict:
@@ -47,7 +78,8 @@ def numba_namespace(program, target: str, kernels: str, constants: dict, jit_ker
         Extra compile-time globals of the kernels (for example the finite-difference step).
     jit_kernels : callable
         ``jit_kernels(namespace, names)`` compiles the backend's functions in place (the
-        backend knows which are device functions and which are entry points).
+        backend knows which are device functions and which are entry points). For the CPU the
+        namespace is a generated module's, so it may ask Numba for ``cache=True``.
 
     Returns
     -------
@@ -59,24 +91,30 @@ def numba_namespace(program, target: str, kernels: str, constants: dict, jit_ker
     key = (source, target, kernels, tuple(sorted(constants.items())), program.dim)
     if key in _numba_cache:
         return _numba_cache[key]
-    namespace = {"math": math, "np": np, "D": program.dim, **constants}
+    backend_names = [node.name for node in ast.parse(kernels).body if isinstance(node, ast.FunctionDef)]
     if target == "cuda":
         from numba import cuda, float64, int32
 
+        namespace = {"math": math, "np": np, "D": program.dim, **constants}
         namespace.update(cuda=cuda, float64=float64, int32=int32)
         jit = cuda.jit(device=True)
+        exec(compile(source, f"<ndpack kernel {program.key}>", "exec"), namespace)
         local_point = f"cuda.local.array({program.dim}, float64)"
+        exec(compile(kernels.replace("point()", local_point), "<ndpack backend kernels>", "exec"), namespace)
     else:
         import numba
 
-        jit = numba.njit(cache=False, fastmath=False)
-        local_point = f"np.empty({program.dim})"
-    exec(compile(source, f"<ndpack kernel {program.key}>", "exec"), namespace)
+        jit = numba.njit(cache=True, fastmath=False)
+        header = (
+            "# Generated by ndpack from a shape's kernel program; do not edit.\n"
+            "import math\n\nimport numpy as np\nfrom numba import prange\n\n"
+            f"D = {program.dim}\n" + "".join(f"{name} = {value!r}\n" for name, value in sorted(constants.items()))
+        )
+        text = header + "\n\n" + source + "\n\n" + kernels.replace("point()", f"np.empty({program.dim})")
+        namespace = _import_generated(text, "numba").__dict__
     for name in program.kernels:
         namespace[name] = jit(namespace[name])
-    before = set(namespace)
-    exec(compile(kernels.replace("point()", local_point), "<ndpack backend kernels>", "exec"), namespace)
-    jit_kernels(namespace, [name for name in namespace if name not in before and callable(namespace[name])])
+    jit_kernels(namespace, backend_names)
     _numba_cache[key] = namespace
     return namespace
 
@@ -97,22 +135,9 @@ def warp_module(program, float_name: str, kernels: str):
         f"Stack = wp.types.vector(length={STACK_DEPTH}, dtype=wp.int32)  # stack() of the kernel language\n\n\n"
     )
     text = header + program.source("warp", float_name) + "\n\n" + kernels
-    digest = hashlib.sha1(text.encode()).hexdigest()[:20]
-    if digest in _warp_cache:
-        return _warp_cache[digest]
-    path = cache_folder() / f"ndpack_{digest}.py"
-    if not path.exists() or path.read_text() != text:
-        # Write then rename, so a concurrent process never imports half a file.
-        with tempfile.NamedTemporaryFile("w", dir=path.parent, suffix=".tmp", delete=False) as handle:
-            handle.write(text)
-        os.replace(handle.name, path)
-    name = f"ndpack_generated_{digest}"
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    _warp_cache[digest] = module
-    return module
+    if text not in _warp_cache:
+        _warp_cache[text] = _import_generated(text, "warp")
+    return _warp_cache[text]
 
 
 _EVALUATE = '''
@@ -140,7 +165,7 @@ def numba_evaluator(program):
     def jit(namespace, names):
         namespace["prange"] = numba.prange
         for name in names:
-            namespace[name] = numba.njit(parallel=name == "evaluate_all", cache=False)(namespace[name])
+            namespace[name] = numba.njit(parallel=name == "evaluate_all", cache=True)(namespace[name])
 
     namespace = numba_namespace(program, "cpu", _EVALUATE, {}, jit)
     parallel, serial = namespace["evaluate_all"], namespace["evaluate_serial"]

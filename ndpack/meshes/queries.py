@@ -68,7 +68,7 @@ def _namespace():
         namespace["prange"] = numba.prange
         for name in names:
             parallel = not name.startswith("serial_")
-            namespace[name] = numba.njit(parallel=parallel, cache=False)(namespace[name])
+            namespace[name] = numba.njit(parallel=parallel, cache=True)(namespace[name])
 
     return numba_namespace(program, "cpu", _LOOPS + serial, {}, jit)
 
