@@ -321,7 +321,6 @@ def _radius_histogram(radii, bins: int = 8, width: int = 40) -> None:
 
 def _backends(args) -> int:
     from .backends import available
-
     from .kernels.compile import cache_folder
 
     status = available()

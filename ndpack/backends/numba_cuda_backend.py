@@ -199,8 +199,8 @@ class NumbaCudaBackend(Backend):
     def _jit(self, namespace, names):
         cuda = self.cuda
         for name in names:
-            if name in ENTRY_NAMES:
-                namespace[name] = cuda.jit(namespace[name])
+            if name in ENTRY_NAMES:  # kept on disk, with the device functions compiled into them
+                namespace[name] = cuda.jit(cache=True)(namespace[name])
             else:
                 namespace[name] = cuda.jit(device=True)(namespace[name])
 
