@@ -55,7 +55,7 @@ def winding_all(points, prm, out):
 
 @functools.cache
 def _namespace():
-    """The compiled loops, one parallel and one serial version of each (compiled once a process)."""
+    """The compiled loops, one parallel and one serial version of each (compiled once, then loaded from disk)."""
     import numba
 
     program = Program(3)
