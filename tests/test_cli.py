@@ -226,7 +226,10 @@ def test_ctrl_c_keeps_what_was_packed(tmp_path):
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     time.sleep(8)  # imports, prototypes, then a few rounds
     process.send_signal(signal.SIGINT)
-    stdout, stderr = process.communicate(timeout=120)
+    try:
+        stdout, stderr = process.communicate(timeout=120)
+    finally:
+        process.kill()  # never leave a packing running after a failed test
     assert process.returncode == 130, stderr
     packing = nd.Packing.load(out)
     assert 0 < len(packing) < 100000 and packing.stop_reason == "interrupted"

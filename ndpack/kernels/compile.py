@@ -30,8 +30,9 @@ _warp_cache: dict[str, object] = {}  # module text -> module
 def cache_folder(kind: str = "warp") -> Path:
     """Where generated modules of ``kind`` ("warp" or "numba") are written.
 
-    ``$NDPACK_CACHE`` or ``~/.cache/ndpack``; the system's temporary folder where that cannot be
-    written (a read-only home), so compiling still works, only without keeping the code.
+    ``$NDPACK_CACHE`` or ``~/.cache/ndpack``; where that cannot be written (a read-only home),
+    a folder in the system's temporary folder, so compiling still works and the code is kept
+    as long as that folder is.
     """
     root = os.environ.get("NDPACK_CACHE") or os.path.join(os.path.expanduser("~"), ".cache", "ndpack")
     for base in (Path(root), Path(tempfile.gettempdir()) / "ndpack-cache"):
