@@ -27,8 +27,7 @@ PACK_EXAMPLES = """examples:
 
 SHAPE is a built-in name[:key=value,...], a mesh file (.obj .stl .ply .off .glb ...), a Python
 script (.py) that sets `shape`, or module:function. Built-in shapes: {shapes}.
-Ctrl-C stops the run after its current round (twice: at once) and still writes what was packed
-to --output.
+Ctrl-C stops the run and still writes what was packed to --output.
 
 output formats (by suffix, or --format):
 {formats}

@@ -20,9 +20,7 @@ the GPU backends, so that a round copies only its answers between host and devic
 
 from __future__ import annotations
 
-import signal
 import sys
-import threading
 import time
 import warnings
 
@@ -559,8 +557,7 @@ def pack(
     -------
     Packing
         Verified in float64: every sphere inside ``shape`` and no two overlapping. An interrupted
-        run (Ctrl-C: the round in progress ends first; press again to stop at once) returns
-        what it packed so far, with ``stop_reason == "interrupted"``.
+        run (Ctrl-C) returns what it packed so far, with ``stop_reason == "interrupted"``.
 
     Raises
     ------
@@ -612,13 +609,8 @@ def pack(
             return state.choose(int(batch), min_radius, room)
     show = sys.stderr.isatty() if progress is None else progress
     bar = tqdm(total=int(n), unit="sphere", disable=not show, dynamic_ncols=True)
-    ctrl_c = _CtrlC()
     try:
-        ctrl_c.listen()
         while True:
-            if ctrl_c.pressed:
-                stop_reason = "interrupted"
-                break
             if state.count >= n:
                 stop_reason = "count"
                 break
@@ -646,10 +638,9 @@ def pack(
             fills.append(covered / volume.value)
             bar.update(len(radii))
             bar.set_postfix(fill=f"{fills[-1]:.4f}", refresh=False)
-    except KeyboardInterrupt:  # a second Ctrl-C, or one where the flag could not be set up
+    except KeyboardInterrupt:
         stop_reason = "interrupted"
     finally:
-        ctrl_c.restore()
         bar.close()
     rounds = min(len(times), len(totals), len(fills))
     packing = Packing(
@@ -666,36 +657,6 @@ def pack(
         shape=shape,
     )
     return _ensure_valid(packing, shape, state.margin, getattr(backend, "precision", "float64"))
-
-
-class _CtrlC:
-    """Ctrl-C during the rounds: the first press asks the loop to stop after the round in
-    progress, a second one raises ``KeyboardInterrupt`` at once.
-
-    A flag the loop reads, rather than the exception alone: Python swallows a KeyboardInterrupt
-    that lands in a finaliser or a C callback ("Exception ignored in ..."), and a run seen to
-    go on after Ctrl-C (in CI, under load) would then pack to the end. Only Python's default
-    handler is replaced, and only in the main thread, where signal handlers live.
-    """
-
-    def __init__(self):
-        self.pressed = False
-        self._previous = None
-
-    def listen(self) -> None:
-        in_main = threading.current_thread() is threading.main_thread()
-        if in_main and signal.getsignal(signal.SIGINT) is signal.default_int_handler:
-            self._previous = signal.signal(signal.SIGINT, self._press)
-
-    def _press(self, signum, frame) -> None:
-        if self.pressed:
-            raise KeyboardInterrupt
-        self.pressed = True
-
-    def restore(self) -> None:
-        if self._previous is not None:
-            signal.signal(signal.SIGINT, self._previous)
-            self._previous = None
 
 
 def _ensure_valid(packing: Packing, shape: Oracle, margin: float, precision: str = "float64") -> Packing:

@@ -223,7 +223,10 @@ def test_ctrl_c_keeps_what_was_packed(tmp_path):
     out = tmp_path / "stopped.npz"
     process = subprocess.Popen([sys.executable, "-m", "ndpack.cli", "pack", "box:dim=2", "-n", "100000",
                                 "--backend", "numpy", "--grid", "40", "-o", str(out), "-q"],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               # Ctrl-C as a terminal delivers it: a job started in the background
+                               # (`cmd &` without job control) ignores SIGINT, and so do its children.
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     time.sleep(8)  # imports, prototypes, then a few rounds
     process.send_signal(signal.SIGINT)
     try:

@@ -1,8 +1,5 @@
 """The ProtoSphere driver: exact cases, validity in 2D-6D, options, stopping, bad input."""
 
-import signal
-import threading
-
 import numpy as np
 import pytest
 
@@ -168,31 +165,6 @@ def test_interrupt_keeps_what_was_packed(monkeypatch):
     assert packing.stop_reason == "interrupted"
     assert len(packing) == 5 and packing.verify().ok
     assert len(packing.stats.count) == 4
-
-
-@pytest.mark.skipif(not hasattr(signal, "pthread_kill"), reason="sends SIGINT to itself")
-@pytest.mark.parametrize("presses", [1, 2])
-def test_ctrl_c_ends_the_round_then_stops_and_a_second_press_stops_at_once(monkeypatch, presses):
-    from ndpack import protosphere
-
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
-    original = protosphere._ProtoSphere.reconverge
-    calls = {"count": 0}
-
-    def ctrl_c_in_the_fifth_round(self, *args, **kwargs):
-        calls["count"] += 1
-        if calls["count"] == 5:
-            for _ in range(presses):  # a real SIGINT, delivered to this (main) thread
-                signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
-        return original(self, *args, **kwargs)
-
-    monkeypatch.setattr(protosphere._ProtoSphere, "reconverge", ctrl_c_in_the_fifth_round)
-    packing = nd.pack(nd.Box([0, 0], [1, 1]), n=1000, seed=0)
-    assert packing.stop_reason == "interrupted" and packing.verify().ok
-    # One press: the fifth round finishes (its statistics are recorded) and no sixth starts.
-    # Two presses: the second raises inside the round, as plain Ctrl-C did.
-    assert len(packing) == 5 and len(packing.stats.count) == (5 if presses == 1 else 4)
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # handler given back
 
 
 def test_invalid_spheres_are_repaired_before_they_are_returned():
