@@ -76,7 +76,6 @@ def _jit(namespace, names):
     for name in names:
         parallel = name in ENTRY_NAMES
         namespace[name] = numba.njit(parallel=parallel, cache=True)(namespace[name])
-    namespace["prange"] = numba.prange
 
 
 class NumbaBackend(Backend):

@@ -23,7 +23,7 @@ import numpy as np
 
 from .language import STACK_DEPTH
 
-_numba_cache: dict[tuple, dict] = {}
+_numba_cache: dict[str, dict] = {}  # module text -> namespace
 _warp_cache: dict[str, object] = {}  # module text -> module
 
 
@@ -86,12 +86,6 @@ def numba_namespace(program, target: str, kernels: str, constants: dict, jit_ker
     dict
         The namespace; the backend's entry points are in it by name.
     """
-    dialect = "cuda" if target == "cuda" else "numba"
-    source = program.source(dialect)
-    key = (source, target, kernels, tuple(sorted(constants.items())), program.dim)
-    if key in _numba_cache:
-        return _numba_cache[key]
-    backend_names = [node.name for node in ast.parse(kernels).body if isinstance(node, ast.FunctionDef)]
     if target == "cuda":
         from numba import cuda
 
@@ -109,12 +103,15 @@ def numba_namespace(program, target: str, kernels: str, constants: dict, jit_ker
         f"import math\n\nimport numpy as np\n{imports}\n"
         f"D = {program.dim}\n" + "".join(f"{name} = {value!r}\n" for name, value in sorted(constants.items()))
     )
+    source = program.source("cuda" if target == "cuda" else "numba")
     text = header + "\n\n" + source + "\n\n" + kernels.replace("point()", local_point)
+    if text in _numba_cache:  # the text holds the target, the dimension and the constants
+        return _numba_cache[text]
     namespace = _import_generated(text, "numba").__dict__
     for name in program.kernels:
         namespace[name] = jit(namespace[name])
-    jit_kernels(namespace, backend_names)
-    _numba_cache[key] = namespace
+    jit_kernels(namespace, [node.name for node in ast.parse(kernels).body if isinstance(node, ast.FunctionDef)])
+    _numba_cache[text] = namespace
     return namespace
 
 
@@ -162,7 +159,6 @@ def numba_evaluator(program):
     import numba
 
     def jit(namespace, names):
-        namespace["prange"] = numba.prange
         for name in names:
             namespace[name] = numba.njit(parallel=name == "evaluate_all", cache=True)(namespace[name])
 

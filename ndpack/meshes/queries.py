@@ -65,7 +65,6 @@ def _namespace():
     serial = _LOOPS.replace("def ", "def serial_")
 
     def jit(namespace, names):
-        namespace["prange"] = numba.prange
         for name in names:
             parallel = not name.startswith("serial_")
             namespace[name] = numba.njit(parallel=parallel, cache=True)(namespace[name])
