@@ -1,17 +1,18 @@
-"""Start-up cost with and without the kernel cache on disk.
+"""What a new user waits for: whole `ndpack pack` processes, from a fresh kernel cache on.
 
-Each backend packs the same shape in fresh processes that share one new ``$NDPACK_CACHE``:
-the first process compiles (a cold cache), the later ones load (a warm cache); Warp's own
-binary cache is moved there too (``WARP_CACHE_PATH``). Inside each process the shape is packed
-twice, so the second packing's time is the packing alone and the difference is what starting
-the backend cost: compiling, or loading the cached code. The process's wall time also counts
-Python's start, imports and loading the shape (a mesh's own queries compile there).
+Per backend, one new ``$NDPACK_CACHE`` (and Warp binary cache) is shared by a sequence of
+processes, as a user meets them: the demo part first (a fresh install's first command), then a
+new size of a part, a new CSG tree of built-ins, a first mesh and a second, new mesh; each is
+run twice in a row, so the second run (warm: nothing left to compile or load for the first
+time) is what the first costs against. Every process is ``python -m ndpack.cli pack SPEC -n N
+--mode fast --backend B -q``, timed whole (Python's start, imports, loading the shape, compiling
+or loading kernels, packing and verifying).
 
-    python bench/compile_cache.py --backends numba --shape tests/data/meshes/armadillo-20k.ply
-    python bench/compile_cache.py --backends numba warp:cuda:0 numba-cuda --shape ... --out x.json
+    python bench/compile_cache.py                                    # numba, the 2-core table
+    python bench/compile_cache.py --backends warp:cuda:0 numba-cuda --scenario meshes \\
+        --mesh ../shared/data/meshes/armadillo.obj --out results.json  # the GPU machine
 
-Writes one JSON row per process (backend, run, start-up and packing seconds, count, fill, the
-packing's radius sum, valid) and prints a table.
+Prints a table (first run, warm re-run, ratio) and writes JSON rows with each process's output.
 """
 
 from __future__ import annotations
@@ -23,59 +24,83 @@ import subprocess
 import sys
 import tempfile
 import time
+from pathlib import Path
 
-CHILD = """
-import json, sys, time
-import numpy as np
-import ndpack as nd
-from ndpack.sources import load_shape
+ROOT = Path(__file__).resolve().parents[1]
+MESHES = ROOT / "tests" / "data" / "meshes"
 
-spec, backend, count = sys.argv[1], sys.argv[2], int(sys.argv[3])
-shape = load_shape(spec)
-times = []
-for _ in range(2):
-    start = time.perf_counter()
-    packing = nd.pack(shape, count, mode="fast", backend=backend, seed=0)
-    times.append(time.perf_counter() - start)
-print(json.dumps({"first": times[0], "second": times[1], "count": len(packing), "fill": packing.fill,
-                  "radius_sum": float(np.sum(packing.radii)), "valid": bool(packing.verify().ok)}))
+#: Shapes written as scripts for `ndpack pack part.py`: sizes and trees the cache has never seen.
+PART = """import ndpack as nd
+side = {side}
+shape = nd.Box([0, 0, 0], [side] * 3) - nd.Ball([side] * 3, 0.6 * side)
 """
+TREE = """import ndpack as nd
+shape = (nd.Box([0, 0, 0], [1, 1, 1]) | nd.Capsule([0, 0, 0], [1.5, 1.5, 0], 0.3)) \\
+    - nd.Cylinder([0.5, 0.5, -1], [0.5, 0.5, 2], 0.2)
+"""
+
+
+def scenario(name: str, folder: Path, mesh: str | None) -> list[tuple[str, str]]:
+    """(label, shape spec) in the order a user meets them."""
+    for label, text in (("part_1", PART.format(side=1.0)), ("part_2.7", PART.format(side=2.7)),
+                        ("part_0.001", PART.format(side=0.001)), ("tree", TREE)):
+        (folder / f"{label}.py").write_text(text)
+    first_mesh = mesh or str(MESHES / "cow.ply")
+    meshes = [("first mesh", first_mesh), ("new mesh", str(MESHES / "fandisk.ply"))]
+    if name == "meshes":
+        return meshes
+    return [("demo", "demo"), ("part", str(folder / "part_1.py")), ("new size 2.7", str(folder / "part_2.7.py")),
+            ("new size 0.001", str(folder / "part_0.001.py")), ("new tree", str(folder / "tree.py")), *meshes]
+
+
+def pack(spec: str, backend: str, count: int, cache: str) -> dict:
+    """One whole `ndpack pack` process: wall seconds, its report, and whether it said it compiled."""
+    name, _, device = backend.partition(":")
+    command = [sys.executable, "-m", "ndpack.cli", "pack", spec, "-n", str(count), "--mode", "fast",
+               "--backend", name, "-q"] + (["--device", device] if device else [])
+    env = {**os.environ, "NDPACK_CACHE": cache, "WARP_CACHE_PATH": os.path.join(cache, "warp-binaries")}
+    start = time.perf_counter()
+    result = subprocess.run(command, capture_output=True, text=True, env=env)
+    wall = time.perf_counter() - start
+    compiled = [line for line in result.stderr.splitlines() if line.startswith("ndpack: compiling")]
+    return {"wall": wall, "status": result.returncode, "compiled": compiled,
+            "valid": "verified: valid" in result.stdout, "stdout": result.stdout,
+            "stderr": result.stderr[-2000:] if result.returncode else ""}
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--backends", nargs="+", default=["numba"])
-    parser.add_argument("--shape", default="demo", help="anything `ndpack pack` takes (default: demo)")
-    parser.add_argument("-n", type=int, default=2000, help="spheres per packing (default 2000)")
-    parser.add_argument("--runs", type=int, default=3, help="processes per backend, the first cold (default 3)")
+    parser.add_argument("--backends", nargs="+", default=["numba"], help="names, with :device (warp:cuda:0)")
+    parser.add_argument("--scenario", choices=("user", "meshes"), default="user",
+                        help="user: demo, sizes, a tree and two meshes; meshes: the two meshes only")
+    parser.add_argument("--mesh", help="the first mesh (default: tests/data/meshes/cow.ply)")
+    parser.add_argument("-n", type=int, default=200, help="spheres per packing (default 200)")
     parser.add_argument("--out", help="JSON file for the rows")
     args = parser.parse_args(argv)
 
     rows = []
     for backend in args.backends:
         with tempfile.TemporaryDirectory(prefix="ndpack-cache-") as cache:
-            for run in range(args.runs):
-                start = time.perf_counter()
-                result = subprocess.run(
-                    [sys.executable, "-c", CHILD, args.shape, backend, str(args.n)],
-                    capture_output=True, text=True,
-                    env={**os.environ, "NDPACK_CACHE": cache, "WARP_CACHE_PATH": os.path.join(cache, "warp-binaries")},
-                )
-                wall = time.perf_counter() - start
-                if result.returncode != 0:
-                    print(f"{backend} run {run}: failed\n{result.stderr[-2000:]}", file=sys.stderr)
-                    break
-                row = json.loads(result.stdout.strip().splitlines()[-1])
-                row.update(backend=backend, run=run, cache="cold" if run == 0 else "warm", wall=wall,
-                           start_up=row["first"] - row["second"])
-                rows.append(row)
-                print(f"{backend:14s} {row['cache']:5s} process {wall:6.1f} s, start-up {row['start_up']:6.1f} s, "
-                      f"packing {row['second']:5.2f} s, {row['count']} spheres, fill {row['fill']:.4f}, "
-                      f"radius sum {row['radius_sum']:.12g}, valid {row['valid']}", flush=True)
+            folder = Path(cache) / "shapes"
+            folder.mkdir()
+            print(f"\n{backend}: fresh cache, {args.n} spheres, fast mode, whole processes")
+            print(f"  {'shape':16s} {'first':>8s} {'warm':>8s} {'ratio':>6s}  compiled in the first")
+            for label, spec in scenario(args.scenario, folder, args.mesh):
+                first, warm = pack(spec, backend, args.n, cache), pack(spec, backend, args.n, cache)
+                for run in (first, warm):
+                    if run["status"] != 0:
+                        print(f"{label} failed:\n{run['stderr']}", file=sys.stderr)
+                ratio = first["wall"] / warm["wall"]
+                said = "; ".join(line.split(" (")[0].removeprefix("ndpack: compiling ") for line in first["compiled"])
+                print(f"  {label:16s} {first['wall']:7.1f}s {warm['wall']:7.1f}s {ratio:6.2f}  {said or '-'}",
+                      flush=True)
+                rows.append({"backend": backend, "shape": label, "spec": Path(spec).name, "first": first,
+                             "warm": warm, "ratio": ratio})
     if args.out:
         with open(args.out, "w") as handle:
-            json.dump({"shape": args.shape, "n": args.n, "rows": rows}, handle, indent=1)
-    return 0 if rows and all(row["valid"] for row in rows) else 1
+            json.dump({"n": args.n, "scenario": args.scenario, "rows": rows}, handle, indent=1)
+    ok = rows and all(row[run]["valid"] for row in rows for run in ("first", "warm"))
+    return 0 if ok else 1
 
 
 if __name__ == "__main__":

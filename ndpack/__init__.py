@@ -17,9 +17,11 @@ from .errors import (
     MeshWarning,
     BoundsError,
     DimensionError,
+    InvalidPackingError,
     NdpackError,
     OracleError,
     ParameterError,
+    RepairWarning,
     ShapeError,
 )
 from .oracle import Oracle, Volume, ball_volume
@@ -33,7 +35,7 @@ from .verify import Verification, verify
 __version__ = "0.1.0"
 
 __all__ = [
-    "BackendError", "BoundsError", "KernelError", "DimensionError", "MeshWarning", "NdpackError", "OracleError", "Oracle",
-    "Packing", "ParameterError", "RoundStats", "ShapeError", "Verification", "Volume",
+    "BackendError", "BoundsError", "KernelError", "DimensionError", "InvalidPackingError", "MeshWarning", "NdpackError", "OracleError", "Oracle",
+    "Packing", "ParameterError", "RepairWarning", "RoundStats", "ShapeError", "Verification", "Volume",
     "ball_volume", "pack", "rotation", "verify", *_shape_names,
 ]

@@ -117,6 +117,9 @@ def _parser() -> argparse.ArgumentParser:
     pack.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     pack.add_argument("--backend", help="numpy, numba, numba-cuda or warp (default: $NDPACK_BACKEND or the fastest)")
     pack.add_argument("--device", help="cpu or cuda:N, for warp and numba-cuda")
+    pack.add_argument("--on-invalid", choices=("repair", "raise"),
+                      help="should the final float64 check fail: repair (shrink or drop the spheres, and "
+                      "say so; the default) or raise (exit 2, nothing saved)")
     pack.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
 
     verify = commands.add_parser("verify", help="re-check a saved packing against its shape", formatter_class=raw,
@@ -148,6 +151,7 @@ def _parser() -> argparse.ArgumentParser:
 
 # ---------------------------------------------------------------------------------------- pack
 def _pack(args) -> int:
+    from .packing import repair_summary
     from .protosphere import pack
     from .sources import describe, load_shape
 
@@ -175,6 +179,7 @@ def _pack(args) -> int:
         backend=args.backend,
         device=args.device,
         progress=not args.quiet and sys.stderr.isatty(),
+        on_invalid=args.on_invalid,
     )
     elapsed = time.perf_counter() - started
     packing.params["source"] = describe(source)
@@ -185,6 +190,8 @@ def _pack(args) -> int:
     print(f"fill:     {packing.fill:.4f}{error}")
     print(f"time:     {elapsed:.2f} s ({packing.params['backend']} backend)")
     print(f"verified: {report.summary()}")
+    if packing.repair:
+        print(f"REPAIRED: {repair_summary(packing.repair)}")
     if args.output:
         print(f"saved:    {_save_or_keep(packing, args.output, args.format, options)}")
     if packing.stop_reason == "interrupted":
@@ -285,6 +292,8 @@ def _refuse(options: dict, picture: str) -> None:
 def _info(args) -> int:
     import numpy as np
 
+    from .packing import repair_summary
+
     packing = _load(args.packing)
     radii = packing.radii
     print(f"file:       {args.packing}")
@@ -298,6 +307,7 @@ def _info(args) -> int:
         print("radii:      min {:.4g}  q1 {:.4g}  median {:.4g}  q3 {:.4g}  max {:.4g}".format(*quartiles))
         print("            ratio max/min {:.3g}".format(radii.max() / radii.min()))
         _radius_histogram(radii)
+    print("repaired:   " + (repair_summary(packing.repair) if packing.repair else "no (passed the final check as made)"))
     if len(packing.stats.time):
         print(f"time:       {packing.stats.time[-1]:.2f} s")
     if packing.medial_axis is not None and len(packing.medial_axis):
@@ -321,14 +331,20 @@ def _radius_histogram(radii, bins: int = 8, width: int = 40) -> None:
 
 def _backends(args) -> int:
     from .backends import available
-    from .kernels.compile import cache_folder
+    from .kernels.compile import cache_folder, cached_modules
 
     status = available()
     for name, state in status.items():
         print(f"{name:11s} {state}")
     folder = cache_folder("numba").parent
     size = sum(path.stat().st_size for path in folder.rglob("*") if path.is_file())
+    modules = cached_modules()
     print(f"\ncompiled kernels are kept in {folder} ({size / 1e6:.1f} MB); deleting it is safe")
+    if not modules:
+        print("none yet: the first packing on each backend compiles its kernels once (seconds to a minute)")
+    for entry in modules:
+        state = {True: "compiled", False: "not compiled yet", None: "Warp's cache not readable"}[entry["compiled"]]
+        print(f"  {entry['kind']:6s} {entry['what']} ({state})")
     return 0 if any(s.startswith("ok") for s in status.values()) else 1
 
 

@@ -40,3 +40,15 @@ class KernelError(NdpackError, TypeError):
 
 class MeshWarning(UserWarning):
     """A mesh was repaired, or its inside is decided by a method that can be wrong near its holes."""
+
+
+class InvalidPackingError(NdpackError, RuntimeError):
+    """A packing failed the final float64 check and ``on_invalid="raise"`` asked not to repair it."""
+
+
+class RepairWarning(RuntimeWarning):
+    """A packing failed the final float64 check and was repaired (spheres shrunk or dropped).
+
+    The repair is recorded in :attr:`ndpack.Packing.repair`. The test suite turns this warning
+    into an error, so a backend or oracle that needs repairs cannot pass unseen.
+    """

@@ -316,8 +316,16 @@ def metadata(packing: Packing) -> dict:
         "volume_error": _finite_or_none(packing.volume_error),
         "params": packing.params,
         "stop_reason": packing.stop_reason,
+        "repair": _json_repair(packing.repair),
         "shape": repr(packing.shape) if packing.shape is not None else None,
     }
+
+
+def _json_repair(repair: dict | None) -> dict | None:
+    """The repair record with infinite worst values as None (standard JSON)."""
+    if repair is None:
+        return None
+    return {key: _finite_or_none(value) if isinstance(value, float) else value for key, value in repair.items()}
 
 
 def _finite_or_none(value):
@@ -357,6 +365,7 @@ def _packing(metadata: dict | None, centers, radii, rounds=None, **extra) -> Pac
         volume_error=0.0 if volume_error is None else volume_error,
         params=metadata.get("params", {}),
         stop_reason=metadata.get("stop_reason", ""),
+        repair=metadata.get("repair"),
         **extra,
     )
 

@@ -64,6 +64,12 @@ class Packing:
     stop_reason : str
         Why the run stopped: ``count``, ``fill``, ``time``, ``min_radius``, ``no_room`` or
         ``interrupted``.
+    repair : dict or None
+        None for a packing that passed the driver's final float64 check as made. Otherwise
+        what that check repaired (``pack(..., on_invalid="repair")``): the counts of spheres
+        ``outside`` and ``overlapping_pairs`` it found, how many were ``shrunk`` and
+        ``dropped``, the ``worst_poke_out`` and ``worst_overlap`` before the repair, and the
+        likely ``cause``.
     shape : Oracle or None
         The packed shape (not saved to files).
     """
@@ -78,6 +84,7 @@ class Packing:
     medial_radii: np.ndarray | None = None
     params: dict = field(default_factory=dict)
     stop_reason: str = ""
+    repair: dict | None = None
     shape: object = field(default=None, repr=False, compare=False)
 
     # ------------------------------------------------------------------ derived values
@@ -124,9 +131,10 @@ class Packing:
         seconds = float(self.stats.time[-1]) if len(self.stats.time) else 0.0
         fill = f"{self.fill:.4f}" + (f" +- {self.fill_error:.4f}" if self.volume_error else "")
         smallest = f"{self.radii.min():.4g}" if len(self) else "-"
+        repaired = f", REPAIRED: {repair_summary(self.repair)}" if self.repair else ""
         return (
             f"{len(self)} spheres in {self.dim}-D, fill {fill}, smallest radius {smallest}, "
-            f"{seconds:.2f} s, stopped by {self.stop_reason or '-'}"
+            f"{seconds:.2f} s, stopped by {self.stop_reason or '-'}{repaired}"
         )
 
     def __repr__(self) -> str:
@@ -150,3 +158,15 @@ class Packing:
         from .formats import load
 
         return load(path, format)
+
+
+def repair_summary(repair: dict) -> str:
+    """One line on what the final check repaired (see :attr:`Packing.repair`)."""
+    def worst(key):
+        value = repair.get(key)
+        return "-" if value is None else f"{value:.3g}"
+
+    return (f"{repair['shrunk']} sphere(s) shrunk and {repair['dropped']} dropped after "
+            f"{repair['outside']} poked out (worst {worst('worst_poke_out')}) and "
+            f"{repair['overlapping_pairs']} pair(s) overlapped (worst {worst('worst_overlap')}): "
+            f"{repair['cause']}")

@@ -29,7 +29,7 @@ from tqdm.auto import tqdm
 
 from .backends import get_backend
 from .backends.prototypes import best_starts, top_order
-from .errors import ParameterError, ShapeError
+from .errors import InvalidPackingError, ParameterError, RepairWarning, ShapeError
 from .oracle import Oracle, ball_volume, check_compatible, check_packable
 from .packing import Packing, RoundStats
 from .shapes.adapters import as_oracle
@@ -512,6 +512,7 @@ def pack(
     backend=None,
     device=None,
     progress: bool | None = None,
+    on_invalid: str | None = None,
 ) -> Packing:
     """Fill ``shape`` with non-overlapping spheres, largest first (ProtoSphere).
 
@@ -552,12 +553,19 @@ def pack(
         ``"cpu"`` or ``"cuda:N"`` for the backends that run on both (warp, numba-cuda).
     progress : bool, optional
         Show a progress bar; by default only when stderr is a terminal.
+    on_invalid : {"repair", "raise"}, optional
+        What to do should the final float64 check find a sphere outside or two overlapping
+        (a plug-in that is not 1-Lipschitz, float32 rounding beyond its margin, a faulty
+        backend): ``"repair"`` shrinks or drops those spheres, warns (:class:`RepairWarning`)
+        and records it in :attr:`Packing.repair`; ``"raise"`` raises
+        :class:`InvalidPackingError`. Default: ``$NDPACK_ON_INVALID``, else ``"repair"``.
 
     Returns
     -------
     Packing
         Verified in float64: every sphere inside ``shape`` and no two overlapping. An interrupted
         run (Ctrl-C) returns what it packed so far, with ``stop_reason == "interrupted"``.
+        ``packing.repair`` is None unless the final check had to repair it.
 
     Raises
     ------
@@ -569,6 +577,7 @@ def pack(
     shape = as_oracle(shape)
     check_compatible(shape)
     _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts)
+    on_invalid = _on_invalid(on_invalid)
     if mode not in ("faithful", "fast"):
         raise ParameterError(f"mode must be 'faithful' or 'fast', got {mode!r}")
     if mode == "fast" and batch != 1:
@@ -656,18 +665,43 @@ def pack(
         stop_reason=stop_reason,
         shape=shape,
     )
-    return _ensure_valid(packing, shape, state.margin, getattr(backend, "precision", "float64"))
+    return _ensure_valid(packing, shape, state.margin, getattr(backend, "precision", "float64"), on_invalid)
 
 
-def _ensure_valid(packing: Packing, shape: Oracle, margin: float, precision: str = "float64") -> Packing:
-    """Verify in float64; shrink (or drop) any sphere that fails, so no invalid packing escapes.
+def _on_invalid(value: str | None) -> str:
+    """``pack``'s ``on_invalid``, or ``$NDPACK_ON_INVALID``, or ``"repair"``, checked."""
+    import os
+
+    where = "on_invalid"
+    if value is None:
+        value, where = os.environ.get("NDPACK_ON_INVALID") or "repair", "NDPACK_ON_INVALID"
+    if value not in ("repair", "raise"):
+        raise ParameterError(f"{where} must be 'repair' or 'raise', got {value!r}")
+    return value
+
+
+def _ensure_valid(packing: Packing, shape: Oracle, margin: float, precision: str = "float64",
+                  on_invalid: str = "repair") -> Packing:
+    """Verify in float64; repair (shrink or drop) any sphere that fails, or raise.
 
     With a conservative oracle and a float64 backend this never triggers; it guards against
-    plug-ins that are not conservative, and against float32 rounding on the GPU.
+    plug-ins that are not conservative, against float32 rounding on the GPU, and against a
+    faulty backend. A repaired packing is no longer the greedy packing the driver made, so the
+    repair is recorded in ``packing.repair`` and announced with a :class:`RepairWarning`.
     """
     report = verify(packing, shape)
     if report.ok:
         return packing
+    if precision != "float64":
+        cause = f"the {precision} backend's rounding exceeded its safety margin"
+    else:
+        cause = ("the shape's distance is probably not conservative (1-Lipschitz; see "
+                 "ndpack.Function.check_lipschitz), or the backend computed clearances wrongly")
+    found = (f"{len(report.outside)} sphere(s) poked out and {len(report.overlapping)} pair(s) overlapped "
+             f"({report.summary()})")
+    if on_invalid == "raise":
+        raise InvalidPackingError(f"the packing failed its final check: {found}; {cause}. "
+                                  "Pass on_invalid='repair' to shrink or drop those spheres instead")
     radii = packing.radii.copy()
     for index in report.outside:
         radii[index] = -shape._distance(packing.centers[index : index + 1])[0] - margin
@@ -677,22 +711,25 @@ def _ensure_valid(packing: Packing, shape: Oracle, margin: float, precision: str
         gap = np.linalg.norm(packing.centers[later] - packing.centers[other]) - radii[other]
         radii[later] = min(radii[later], gap - margin)
     keep = radii > 0
-    if precision != "float64":
-        cause = f"The {precision} backend's rounding exceeded its safety margin."
-    else:
-        cause = (
-            "The shape's distance is probably not conservative (1-Lipschitz); see "
-            "ndpack.Function.check_lipschitz"
-        )
+    changed = radii != packing.radii
+    repair = {
+        "outside": int(len(report.outside)),
+        "overlapping_pairs": int(len(report.overlapping)),
+        "shrunk": int((changed & keep).sum()),
+        "dropped": int((~keep).sum()),
+        "worst_poke_out": float(report.worst_containment),
+        "worst_overlap": float(report.worst_overlap),
+        "cause": cause,
+    }
     warnings.warn(
-        f"{len(report.outside)} sphere(s) poked out and {len(report.overlapping)} pair(s) "
-        f"overlapped ({report.summary()}); they were shrunk and {int((~keep).sum())} dropped. {cause}",
-        RuntimeWarning,
+        f"{found}; {repair['shrunk']} were shrunk and {repair['dropped']} dropped: {cause}. "
+        "The repair is recorded in packing.repair; on_invalid='raise' raises instead",
+        RepairWarning,
         stacklevel=3,
     )
     packing = packing.replace_spheres(packing.centers[keep], radii[keep], packing.rounds[keep])
+    packing.repair = repair
     report = verify(packing, shape)
     if not report.ok:  # shrinking can only help; this is a last line of defence
         raise ShapeError(f"could not repair the packing: {report.summary()}")
     return packing
-

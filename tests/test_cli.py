@@ -180,6 +180,7 @@ def test_render_and_info(saved_square, tmp_path):
     result = run("info", str(saved_square))
     assert result.returncode == 0, result.stderr
     assert "60 in 2-D" in result.stdout and "median" in result.stdout and "source: square" in result.stdout
+    assert "repaired:   no" in result.stdout
     one_line_error(run("info", str(tmp_path / "nothing.npz")), "no such")
     # `ndpack info x.npz | head -1`: the reader leaves early; no traceback.
     reader_gone = subprocess.Popen([sys.executable, "-m", "ndpack.cli", "info", str(saved_square)],
@@ -237,3 +238,18 @@ def test_ctrl_c_keeps_what_was_packed(tmp_path):
     packing = nd.Packing.load(out)
     assert 0 < len(packing) < 100000 and packing.stop_reason == "interrupted"
     assert packing.verify(nd.Box([0, 0], [1, 1])).ok
+
+
+def test_a_repaired_packing_says_so_in_its_files_and_in_info(saved_square, tmp_path):
+    # A packing the final check repaired is not the greedy packing it claims to be: the record
+    # travels with it (npz and json) and `ndpack info` shows it.
+    packing = nd.Packing.load(saved_square)
+    record = {"outside": 2, "overlapping_pairs": 1, "shrunk": 3, "dropped": 0, "worst_poke_out": 0.01,
+              "worst_overlap": float("-inf"), "cause": "a test"}
+    packing.repair = record
+    for name in ("repaired.npz", "repaired.json"):
+        loaded = nd.Packing.load(packing.save(tmp_path / name))
+        assert loaded.repair == {**record, "worst_overlap": None}
+        result = run("info", str(tmp_path / name))
+        assert result.returncode == 0, result.stderr
+        assert "repaired:   3 sphere(s) shrunk and 0 dropped" in result.stdout and "a test" in result.stdout

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import ndpack as nd
+from ndpack.backends.numpy_backend import NumpyBackend
 from ndpack.protosphere import cooling_schedule, grid_counts
 
 
@@ -169,21 +170,55 @@ def test_interrupt_keeps_what_was_packed(monkeypatch):
 
 def test_invalid_spheres_are_repaired_before_they_are_returned():
     # The last line of defence against oracles that are not conservative: spheres that fail
-    # verification are shrunk (or dropped) and the user is warned.
+    # verification are shrunk (or dropped), the user is warned, and the packing records it.
     from ndpack.protosphere import _ensure_valid
 
     square = nd.Box([0, 0], [1, 1])
     raw = nd.Packing(
         centers=np.array([[0.5, 0.5], [0.9, 0.5], [0.05, 0.05]]),
-        radii=np.array([0.3, 0.2, 0.1]),  # the second overlaps the first and pokes out
+        radii=np.array([0.3, 0.2, 0.1]),  # the second overlaps the first; it and the third poke out
         rounds=np.arange(3),
         volume=1.0,
     )
-    with pytest.warns(RuntimeWarning, match="not conservative"):
-        fixed = _ensure_valid(raw, square, margin=1e-10)
+    with pytest.warns(nd.RepairWarning, match="not conservative"):
+        fixed = _ensure_valid(raw, square, margin=1e-10, on_invalid="repair")
     assert nd.verify(fixed, square).ok
     assert len(fixed) == 3
     assert fixed.radii[0] == 0.3 and fixed.radii[1] < 0.1
+    assert fixed.repair["outside"] == 2 and fixed.repair["overlapping_pairs"] == 1
+    assert fixed.repair["shrunk"] == 2 and fixed.repair["dropped"] == 0
+    assert fixed.repair["worst_overlap"] == pytest.approx(0.1)
+    assert "REPAIRED" in fixed.summary() and raw.repair is None
+    with pytest.raises(nd.InvalidPackingError, match="2 sphere\\(s\\) poked out and 1 pair"):
+        _ensure_valid(raw, square, margin=1e-10, on_invalid="raise")
+
+
+class _OverstatingBackend(NumpyBackend):
+    """The reference with every clearance 2% too large: a backend that makes overlaps every round."""
+
+    name = "overstating"
+
+    def converge(self, *args, **kwargs):
+        points, clearance = super().converge(*args, **kwargs)
+        return points, clearance * 1.02
+
+
+def test_a_backend_that_overstates_fails_instead_of_being_repaired_unseen():
+    # What the suite's validity assertions rest on: the driver no longer repairs silently. In
+    # the tests (NDPACK_ON_INVALID=raise) a packing with overlaps raises; the old driver shrank
+    # the spheres and returned a packing that passed verify().ok.
+    square = nd.Box([0, 0], [1, 1])
+    with pytest.raises(nd.InvalidPackingError, match="overlapped|poked out"):
+        nd.pack(square, n=40, grid=16, backend=_OverstatingBackend())
+    # Asked for, the repair still happens, and says so in the packing and its files.
+    with pytest.warns(nd.RepairWarning):
+        repaired = nd.pack(square, n=40, grid=16, backend=_OverstatingBackend(), on_invalid="repair")
+    assert repaired.verify().ok and repaired.repair["shrunk"] + repaired.repair["dropped"] > 0
+
+
+def test_on_invalid_is_checked():
+    with pytest.raises(nd.ParameterError, match="on_invalid must be 'repair' or 'raise'"):
+        nd.pack(nd.Box([0, 0], [1, 1]), n=2, on_invalid="ignore")
 
 
 def test_dead_prototypes_are_revived_before_giving_up_for_room():

@@ -1,11 +1,16 @@
 """Scalar kernels against the NumPy oracles: every shape and CSG node, in every dimension it has.
 
-Each shape's kernel program is compiled with Numba (``numba_evaluator``) and compared with the
-shape's own ``_distance`` at points sampled inside and around its bounds; both compute the same
-formula, so they agree to rounding. Numba compiles each distinct program text once (about half a
-second), so the tests reuse structures: the shapes (or CSG nodes) of one dimension are compiled
-together behind a test-only selector node, and further random instances with the same structure
-reuse that program. Torus, Polygon and the nested trees are built and compiled on their own.
+Each shape is compiled both ways the backends run it, with Numba (``numba_evaluator``), and
+compared with the shape's own ``_distance`` at points sampled inside and around its bounds; both
+compute the same formula, so they agree to rounding:
+
+- as a tape (:mod:`ndpack.kernels.tape`, the default): its numbers for the interpreter of its
+  dimension, compiled once per dimension for every shape;
+- as a specialised program (:func:`ndpack.kernels.build`, the opt-in and the fallback for deep
+  trees). Numba compiles each distinct program text once (about half a second), so these tests
+  reuse structures: the shapes (or CSG nodes) of one dimension are compiled together behind a
+  test-only selector node, and further random instances with the same structure reuse that
+  program. Torus, Polygon and the nested trees are built and compiled on their own.
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ import ndpack as nd
 from ndpack.errors import KernelError
 from ndpack.kernels import build
 from ndpack.kernels.compile import numba_evaluator
+from ndpack.kernels.tape import flatten
 from ndpack.oracle import Oracle
 
 pytest.importorskip("numba")
@@ -60,10 +66,23 @@ def compare(shape: Oracle, rng: np.random.Generator, program=None, prm=None, eva
     assert np.any(want < 0) and np.any(want > 0), f"{label} {shape!r}: sample points all on one side"
     error = np.abs(got - want).max()
     assert error <= TOLERANCE * shape.scale, f"{label} {shape!r}: kernel differs from NumPy by {error:.3g}"
+    flat = flatten(shape)
+    error = np.abs(tape_evaluator(flat.program)(points, flat.params) - want).max()
+    assert error <= TOLERANCE * shape.scale, f"{label} {shape!r}: its tape differs from NumPy by {error:.3g}"
     # Every dialect prints (Warp and CUDA are not compiled here: that needs their toolchains).
     for dialect in ("warp", "cuda"):
         assert "def sd(" in program.source(dialect)
     return program
+
+
+_tape_evaluators = {}
+
+
+def tape_evaluator(program):
+    """The compiled evaluator of an interpreter program, built once per program (dimension)."""
+    if id(program) not in _tape_evaluators:
+        _tape_evaluators[id(program)] = (program, numba_evaluator(program))
+    return _tape_evaluators[id(program)][1]
 
 
 def random_rotation(rng: np.random.Generator, dim: int, reflect: bool = False) -> np.ndarray:
@@ -364,8 +383,9 @@ def _compiled_gradient(shape, points, hint=None, bound=None):
         for name in names:
             namespace[name] = numba.njit(namespace[name])
 
-    program, params = compiled_program(shape)
-    namespace = numba_namespace(program, "cpu", _GRADIENT_LOOP, {}, jit)
+    flat = compiled_program(shape)
+    params = flat.params
+    namespace = numba_namespace(flat.program, "cpu", _GRADIENT_LOOP, jit)
     count = len(points)
     feature, distance, gradient = np.empty(count), np.empty(count), np.empty((count, shape.dim))
     hint = np.full(count, -1.0) if hint is None else np.asarray(hint, dtype=np.float64)

@@ -162,8 +162,29 @@ def no_wall(count: int) -> np.ndarray:
     return np.full(count, -np.inf)
 
 
+#: How the compiled backends get a shape's distance: "tape" (the default: numbers for the
+#: interpreter of its dimension, nothing to compile for a new shape) or "specialised" (code
+#: generated for the tree, compiled for each new tree; see ndpack.kernels.program).
+KERNEL_MODES = ("tape", "specialised")
+
+
+def kernel_mode() -> str:
+    """``$NDPACK_KERNELS``, or "tape"; checked."""
+    import os
+
+    from ..errors import BackendError
+
+    mode = os.environ.get("NDPACK_KERNELS") or "tape"
+    if mode not in KERNEL_MODES:
+        raise BackendError(f"NDPACK_KERNELS must be one of {', '.join(KERNEL_MODES)}, got {mode!r}")
+    return mode
+
+
 def compiled_program(shape):
-    """The kernel program of ``shape`` and its (k,) float64 parameters, built once per shape.
+    """What the compiled backends run for ``shape`` (:class:`~ndpack.kernels.tape.Flat`: the
+    program and the shape's numbers), made once per shape and :func:`kernel_mode`.
+
+    A tree too deep for the tape falls back to a specialised program.
 
     Raises
     ------
@@ -171,12 +192,20 @@ def compiled_program(shape):
         If the shape has no scalar kernel (a NumPy-only plug-in), saying what to do.
     """
     from ..errors import KernelError
-    from ..kernels import build
+    from ..kernels.program import build
+    from ..kernels.tape import Flat, TapeTooDeep, flatten
 
-    cached = shape.__dict__.get("_ndpack_program")
-    if cached is None:
+    mode = kernel_mode()
+    made = shape.__dict__.setdefault("_ndpack_flat", {})
+    if mode not in made:
         try:
-            program = build(shape)
+            try:
+                if mode != "tape":
+                    raise TapeTooDeep("asked for specialised kernels")
+                flat = flatten(shape)
+            except TapeTooDeep:
+                program = build(shape)
+                flat = Flat(program, program.param_array(), program.device_values)
         except KernelError as error:
             from ..errors import BackendError
             from ..shapes.plugin import Function, tree
@@ -187,9 +216,8 @@ def compiled_program(shape):
             advice = ("Use backend='numpy', or write the plug-in as a scalar function (ndpack.ScalarFunction) "
                       "so it compiles for every backend" if numpy_only else "Use backend='numpy'")
             raise BackendError(f"{shape!r} cannot run on a compiled backend: {error}. {advice}") from None
-        cached = (program, program.param_array())
-        shape.__dict__["_ndpack_program"] = cached
-    return cached
+        made[mode] = flat
+    return made[mode]
 
 
 def has_kernel(shape) -> bool:

@@ -1,6 +1,7 @@
 """The Numba CPU backend: the reference's loops compiled to machine code, parallel over prototypes.
 
-Each shape compiles once per structure and dimension (see :mod:`ndpack.kernels`); the per-point
+The kernels of a dimension compile once per machine, for every shape of built-ins (a tape, see
+:mod:`ndpack.kernels.tape`), and are loaded from disk afterwards; the per-point
 work is shared with the CUDA backend (:mod:`ndpack.backends.numba_kernels`). float64 throughout.
 The spheres near a prototype's cell, and the prototypes a round's spheres touch, are found through
 a sphere index (:mod:`ndpack.backends.sphere_index`), so neither costs a pass over every sphere.
@@ -8,6 +9,9 @@ a sphere index (:mod:`ndpack.backends.sphere_index`), so neither costs a pass ov
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -19,20 +23,15 @@ KERNELS = Path(__file__).with_name("numba_kernels.py").read_text()
 
 #: Entry points: a parallel loop over prototypes (or boxes) calling the per-point functions.
 ENTRIES = '''
-def clearance_all(points, prm, centers, radii, nbr, out, out_direction):
+def clearance_all(points, prm, centers, radii, nbr, h, out, out_direction):
     for i in prange(points.shape[0]):
-        clearance_one(i, points, prm, centers, radii, nbr, out, out_direction)
+        clearance_one(i, points, prm, centers, radii, nbr, h, out, out_direction)
 
 
-def distance_all(points, prm, out):
-    for i in prange(points.shape[0]):
-        out[i] = sd(points[i], prm)
-
-
-def converge_all(points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, out_points,
+def converge_all(points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, out_points,
                  out_clearance):
     for i in prange(points.shape[0]):
-        converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, out_points,
+        converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, out_points,
                      out_clearance)
 
 
@@ -48,18 +47,17 @@ def index_insert_range(start, stop, centers, radii, origin, top, heads, nxt, lev
                      level_rmax)
 
 
-def index_bound(lower, upper, reach, centers, radii, origin, top, heads, nxt, level_of, level_head, level_next,
-                level_count, level_rmax, out):
+def index_query(lower, upper, bound, counting, centers, radii, origin, top, heads, nxt, level_of, level_head,
+                level_next, level_count, level_rmax, counts, out):
     for b in prange(lower.shape[0]):
-        out[b] = index_near(b, lower, upper, reach[b], 0, centers, radii, origin, top, heads, nxt, level_of,
-                            level_head, level_next, level_count, level_rmax, heads.reshape(1, -1), 0, 0)[0]
-
-
-def index_fill(lower, upper, bound, centers, radii, origin, top, heads, nxt, level_of, level_head, level_next,
-               level_count, level_rmax, counts, out):
-    for b in prange(lower.shape[0]):
-        counts[b] = index_near(b, lower, upper, bound[b], 1, centers, radii, origin, top, heads, nxt, level_of,
-                               level_head, level_next, level_count, level_rmax, out, b, out.shape[1])[1]
+        # counting 0: tighten bound[b]; 1: count the spheres within it, the first of them in out[b]
+        # (one kernel for both: each parallel entry costs seconds to compile on first use).
+        if counting == 0:
+            bound[b] = index_near(b, lower, upper, bound[b], 0, centers, radii, origin, top, heads, nxt, level_of,
+                                  level_head, level_next, level_count, level_rmax, out, b, 0)[0]
+        else:
+            counts[b] = index_near(b, lower, upper, bound[b], 1, centers, radii, origin, top, heads, nxt, level_of,
+                                   level_head, level_next, level_count, level_rmax, out, b, out.shape[1])[1]
 '''
 
 #: Central-difference step, as a fraction of the shape's scale: float64 rounding in the
@@ -67,7 +65,7 @@ def index_fill(lower, upper, bound, centers, radii, origin, top, heads, nxt, lev
 FD_STEP = 1e-6
 #: Above this many new spheres, :meth:`NumbaBackend.touched` indexes them instead of testing all.
 INDEX_NEW_SPHERES = 32
-ENTRY_NAMES = ("distance_all", "clearance_all", "converge_all", "touched_all", "index_bound", "index_fill")
+ENTRY_NAMES = ("clearance_all", "converge_all", "touched_all", "index_query")
 
 
 def _jit(namespace, names):
@@ -94,18 +92,13 @@ class NumbaBackend(Backend):
 
         self.numba = numba
         self.threads = threads
-        self._namespaces = {}  # id(program) -> (program, namespace)
         self._indexes = {}  # dim -> SphereIndex of the spheres last asked about
 
     def _kernels(self, shape):
-        from ..kernels.compile import numba_namespace
-
-        program, params = compiled_program(shape)
-        if id(program) in self._namespaces:
-            return self._namespaces[id(program)][1], params
-        namespace = numba_namespace(program, "cpu", KERNELS + ENTRIES, {"H": FD_STEP * shape.scale}, _jit)
-        self._namespaces[id(program)] = (program, namespace)
-        return namespace, params
+        """The compiled namespace that runs ``shape``, its numbers and its finite-difference step."""
+        flat = compiled_program(shape)
+        _compile_geometry_beside(shape.dim)
+        return program_kernels(flat.program), flat.params, FD_STEP * shape.scale
 
     def _run(self, function, *args):
         if self.threads is None:
@@ -118,29 +111,30 @@ class NumbaBackend(Backend):
             self.numba.set_num_threads(previous)
 
     def _free_space(self, shape, points, centers, radii, neighbours, directions):
-        namespace, params = self._kernels(shape)
+        if not directions:  # converging in no steps measures the clearance: one kernel fewer to compile
+            return self.converge(shape, points, points, points, centers, radii, neighbours, np.zeros(0))[1], None
+        namespace, params, h = self._kernels(shape)
         out = np.empty(len(points))
         out_direction = np.empty((len(points) if directions else 0, shape.dim))
         self._run(namespace["clearance_all"], _f64(points), params, _f64(centers), _f64(radii),
-                  _i64(neighbours), out, out_direction)
+                  _i64(neighbours), h, out, out_direction)
         return out, out_direction
 
     def distance(self, shape, points):
-        namespace, params = self._kernels(shape)
-        out = np.empty(len(points))
-        self._run(namespace["distance_all"], _f64(points), params, out)
-        return out
+        # With no spheres the clearance is minus the distance, exactly: one kernel fewer to compile.
+        none = np.zeros((len(points), 0), dtype=np.int64)
+        return -self._free_space(shape, points, np.zeros((0, shape.dim)), np.zeros(0), none, directions=False)[0]
 
     def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None,
                  starts=None):
-        namespace, params = self._kernels(shape)
+        namespace, params, h = self._kernels(shape)
         out_points = np.empty_like(points)
         out_clearance = np.empty(len(points))
         tries = 0 if starts is None else len(starts)
         starts = _f64(starts) if tries else np.zeros((1, len(points), shape.dim))
         self._run(namespace["converge_all"], _f64(points), starts, tries, _f64(cell_lower), _f64(cell_upper),
                   _f64(no_wall(len(points)) if wall is None else wall), params,
-                  _f64(centers), _f64(radii), _i64(neighbours), _f64(steps), out_points, out_clearance)
+                  _f64(centers), _f64(radii), _i64(neighbours), _f64(steps), h, out_points, out_clearance)
         return out_points, out_clearance
 
     def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
@@ -152,13 +146,13 @@ class NumbaBackend(Backend):
         centers, radii = _f64(centers), _f64(radii)
         index = self._index(box_lower.shape[1]).sync(centers, radii)
         lower, upper = _f64(box_lower), _f64(box_upper)
-        bound = np.empty(count)
-        self._run(namespace["index_bound"], lower, upper, _f64(reach), centers, radii, *index, bound)
+        bound = _f64(reach).copy()
         counts = np.empty(count, dtype=np.int64)
-        self._run(namespace["index_fill"], lower, upper, bound, centers, radii, *index, counts,
-                  np.empty((count, 0), dtype=np.int64))
+        query = namespace["index_query"]
+        self._run(query, lower, upper, bound, 0, centers, radii, *index, counts, np.empty((count, 0), dtype=np.int64))
+        self._run(query, lower, upper, bound, 1, centers, radii, *index, counts, np.empty((count, 0), dtype=np.int64))
         table = np.full((count, int(counts.max())), len(centers), dtype=np.int64)
-        self._run(namespace["index_fill"], lower, upper, bound, centers, radii, *index, counts, table)
+        self._run(query, lower, upper, bound, 1, centers, radii, *index, counts, table)
         table.sort(axis=1)  # the order of the reference (ascending ids, padding last)
         return (table, bound) if return_bound else table
 
@@ -182,23 +176,81 @@ class NumbaBackend(Backend):
 
         new_centers, new_radii = _f64(new_centers), _f64(new_radii)
         index = SphereIndex(namespace["index_insert_range"]).sync(new_centers, new_radii)
-        bound = np.empty(len(points))
-        self._run(namespace["index_bound"], points, points, clearance, new_centers, new_radii, *index, bound)
+        bound = clearance.copy()
+        self._run(namespace["index_query"], points, points, bound, 0, new_centers, new_radii, *index,
+                  np.empty(0, dtype=np.int64), np.empty((len(points), 0), dtype=np.int64))
         return bound < clearance
 
 
-_geometry_kernels = {}
+_namespaces = {}  # id(program) -> (program, namespace)
 
 
-def geometry_kernels(dim):
-    """The shape-free kernels (near_spheres, touched) for dimension ``dim``."""
-    if dim in _geometry_kernels:
-        return _geometry_kernels[dim]
+def program_kernels(program):
+    """The backend's kernels compiled with ``program`` (cached: in this process, and on disk by
+    Numba)."""
     from ..kernels.compile import numba_namespace
-    from ..kernels.program import shape_free
 
-    _geometry_kernels[dim] = numba_namespace(shape_free(dim), "cpu", KERNELS + ENTRIES, {"H": 1.0}, _jit)
-    return _geometry_kernels[dim]
+    if id(program) not in _namespaces:
+        _namespaces[id(program)] = (program, numba_namespace(program, "cpu", KERNELS + ENTRIES, _jit))
+    return _namespaces[id(program)][1]
+
+
+def geometry_kernels(dim, wait: bool = True):
+    """The shape-free kernels (near_spheres, touched) for dimension ``dim``: those of the tape
+    interpreter's namespace, which the shapes of built-ins share. Where a second process is
+    compiling them (:func:`_compile_geometry_beside`), waits for it first (unless not ``wait``)."""
+    from ..kernels.tape import interpreter
+
+    helper = _helpers.get(dim)
+    if wait and helper is not None:
+        _helpers[dim] = None
+        try:
+            helper.wait(timeout=900)
+        except subprocess.TimeoutExpired:  # compile here then; the helper's cache entries are never half-written
+            helper.kill()
+    return program_kernels(interpreter(dim))
+
+
+#: The shape-free entry points every packing calls.
+GEOMETRY_ENTRIES = ("index_query", "touched_all", "index_insert_range")
+_helpers = {}  # dim -> the process compiling them, or None
+
+
+def _compile_geometry_beside(dim: int) -> None:
+    """Where this machine has not compiled the shape-free kernels of ``dim`` yet, compile them in
+    a second process while this one compiles the shape's: a first packing then waits for two
+    compilers side by side, not one after the other (a first ``ndpack pack`` on 2 cores: 17 s ->
+    12 s, docs/benchmarks.md "Start-up"). Numba's disk cache hands the result over."""
+    if dim in _helpers:
+        return
+    _helpers[dim] = None
+    namespace = geometry_kernels(dim, wait=False)
+    if (os.cpu_count() or 1) < 2 or all(_on_disk(namespace[name]) for name in GEOMETRY_ENTRIES):
+        return
+    command = f"from ndpack.backends.numba_backend import warm_geometry; warm_geometry({int(dim)})"
+    try:
+        _helpers[dim] = subprocess.Popen([sys.executable, "-c", command], stdin=subprocess.DEVNULL,
+                                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    except OSError:  # no second process here: this one compiles them when they are first used
+        pass
+
+
+def _on_disk(dispatcher) -> bool:
+    """Whether Numba's disk cache holds compiled code of ``dispatcher`` (unknown: True)."""
+    index = getattr(getattr(getattr(dispatcher, "_cache", None), "_cache_file", None), "_index_path", None)
+    return index is None or os.path.exists(index)
+
+
+def warm_geometry(dim: int) -> None:
+    """Compile (or load) the shape-free kernels of ``dim`` by running them on a few spheres, with
+    the argument types a packing passes: what :func:`_compile_geometry_beside`'s process runs."""
+    rng = np.random.default_rng(0)
+    backend = NumbaBackend()
+    centers, radii = rng.random((40, dim)), np.full(40, 0.01)
+    points = rng.random((8, dim))
+    backend.near_spheres(points, points + 0.1, np.ones(8), centers, radii, return_bound=True)
+    backend.touched(points, np.full(8, 0.1), centers[:2], radii[:2])
+    backend.touched(points, np.full(8, 0.1), centers, radii)
 
 
 def _f64(array):

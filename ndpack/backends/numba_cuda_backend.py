@@ -13,6 +13,8 @@ Without a GPU, set ``NUMBA_ENABLE_CUDASIM=1`` to run the same kernels in Numba's
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 from ..errors import BackendError
@@ -21,23 +23,17 @@ from .device_spheres import DeviceSpheres
 from .numba_backend import FD_STEP, KERNELS
 
 ENTRIES = '''
-def clearance_all(points, prm, centers, radii, nbr, out, out_direction):
+def clearance_all(points, prm, centers, radii, nbr, h, out, out_direction):
     i = cuda.grid(1)
     if i < points.shape[0]:
-        clearance_one(i, points, prm, centers, radii, nbr, out, out_direction)
+        clearance_one(i, points, prm, centers, radii, nbr, h, out, out_direction)
 
 
-def distance_all(points, prm, out):
-    i = cuda.grid(1)
-    if i < points.shape[0]:
-        out[i] = sd(points[i], prm)
-
-
-def converge_all(points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, out_points,
+def converge_all(points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, out_points,
                  out_clearance):
     i = cuda.grid(1)
     if i < points.shape[0]:
-        converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, out_points,
+        converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, out_points,
                      out_clearance)
 
 
@@ -154,9 +150,9 @@ def move_ids(ids, starts, tries, points, clearance, polished, lower, upper, wall
     b = cuda.grid(1)
     if b < ids.shape[0]:
         move_one(b, ids, starts, tries, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
-                 steps, polish)
+                 steps, h, polish)
 '''
-ENTRY_NAMES = ("distance_all", "clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
+ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
                "select_all", "max_all", "touched_index_select", "gather_ids", "index_bound_ids", "index_fill_ids",
                "near_finish", "move_ids", "set_points", "set_floats")
 THREADS_PER_BLOCK = 128
@@ -187,8 +183,8 @@ class NumbaCudaBackend(Backend):
         self.cuda = cuda
         self.device = int(device)
         cuda.select_device(self.device)
-        self._namespaces = {}
-        self._geometries = {}
+        self._namespaces = {}  # id(program) -> (program, namespace)
+        self._params = weakref.WeakKeyDictionary()  # shape -> its numbers on the device
         self._spheres = DeviceSpheres(
             empty=lambda capacity, dim: (cuda.device_array((capacity, dim)), cuda.device_array(capacity)),
             write=_write_rows,
@@ -197,32 +193,37 @@ class NumbaCudaBackend(Backend):
         )
 
     def _jit(self, namespace, names):
+        from ..kernels.compile import CudaKernel
+
         cuda = self.cuda
         for name in names:
             if name in ENTRY_NAMES:  # kept on disk, with the device functions compiled into them
-                namespace[name] = cuda.jit(cache=True)(namespace[name])
+                namespace[name] = CudaKernel(cuda.jit(cache=True)(namespace[name]))
             else:
                 namespace[name] = cuda.jit(device=True)(namespace[name])
 
     def _kernels(self, shape):
+        """The compiled namespace that runs ``shape``, its numbers on the device and its
+        finite-difference step."""
+        flat = compiled_program(shape)
+        if shape not in self._params:
+            self._params[shape] = self.cuda.to_device(flat.params)
+        return self._program_kernels(flat.program), self._params[shape], FD_STEP * shape.scale
+
+    def _program_kernels(self, program):
         from ..kernels.compile import numba_namespace
 
-        program, params = compiled_program(shape)
         if id(program) not in self._namespaces:
-            namespace = numba_namespace(
-                program, "cuda", KERNELS + ENTRIES + STORE_ENTRIES, {"H": FD_STEP * shape.scale}, self._jit
-            )
-            self._namespaces[id(program)] = (program, namespace, self.cuda.to_device(params))
-        return self._namespaces[id(program)][1:]
+            namespace = numba_namespace(program, "cuda", KERNELS + ENTRIES + STORE_ENTRIES, self._jit)
+            self._namespaces[id(program)] = (program, namespace)
+        return self._namespaces[id(program)][1]
 
     def _geometry(self, dim):
-        """The shape-free kernels (near_spheres, touched) for dimension ``dim``."""
-        from ..kernels.compile import numba_namespace
-        from ..kernels.program import shape_free
+        """The shape-free kernels (near_spheres, touched) for dimension ``dim``: those of the
+        tape interpreter's namespace, which the shapes of built-ins share."""
+        from ..kernels.tape import interpreter
 
-        if dim not in self._geometries:
-            self._geometries[dim] = numba_namespace(shape_free(dim), "cuda", KERNELS + ENTRIES, {"H": 1.0}, self._jit)
-        return self._geometries[dim]
+        return self._program_kernels(interpreter(dim))
 
     def _launch(self, kernel, count, *args, stream=0):
         if count:
@@ -235,23 +236,22 @@ class NumbaCudaBackend(Backend):
         return d_centers, d_radii, self.cuda.to_device(np.ascontiguousarray(table, dtype=np.int64))
 
     def _free_space(self, shape, points, centers, radii, neighbours, directions):
-        namespace, params = self._kernels(shape)
+        namespace, params, h = self._kernels(shape)
         d_centers, d_radii, table = self._spheres_and_table(centers, radii, neighbours)
         out = self.cuda.device_array(max(len(points), 1), dtype=np.float64)
         out_direction = self.cuda.device_array((len(points) if directions else 0, shape.dim), dtype=np.float64)
         self._launch(namespace["clearance_all"], len(points), self.cuda.to_device(_f64(points)), params,
-                     d_centers, d_radii, table, out, out_direction)
+                     d_centers, d_radii, table, h, out, out_direction)
         return out.copy_to_host()[: len(points)], out_direction.copy_to_host()
 
     def distance(self, shape, points):
-        namespace, params = self._kernels(shape)
-        out = self.cuda.device_array(max(len(points), 1), dtype=np.float64)
-        self._launch(namespace["distance_all"], len(points), self.cuda.to_device(_f64(points)), params, out)
-        return out.copy_to_host()[: len(points)]
+        # With no spheres the clearance is minus the distance, exactly: one kernel fewer to compile.
+        none = np.zeros((len(points), 0), dtype=np.int64)
+        return -self._free_space(shape, points, np.zeros((0, shape.dim)), np.zeros(0), none, directions=False)[0]
 
     def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None,
                  starts=None):
-        namespace, params = self._kernels(shape)
+        namespace, params, h = self._kernels(shape)
         d_centers, d_radii, table = self._spheres_and_table(centers, radii, neighbours)
         to = self.cuda.to_device
         out_points = self.cuda.device_array(points.shape, dtype=np.float64)
@@ -261,7 +261,7 @@ class NumbaCudaBackend(Backend):
         starts = _f64(starts) if tries else np.zeros((1, len(points), shape.dim))
         self._launch(namespace["converge_all"], len(points), to(_f64(points)), to(starts), tries, to(_f64(cell_lower)),
                      to(_f64(cell_upper)), to(_f64(wall)), params, d_centers, d_radii, table, to(_f64(steps)),
-                     out_points, out_clearance)
+                     h, out_points, out_clearance)
         return out_points.copy_to_host(), out_clearance.copy_to_host()
 
     def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
@@ -315,8 +315,7 @@ class _CudaDevice:
 
     def __init__(self, backend, shape):
         self.backend, self.cuda = backend, backend.cuda
-        self.namespace, self.params = backend._kernels(shape)
-        self.h = 0.0  # the step is compiled in (H); the kernels take it for Warp's sake
+        self.namespace, self.params, self.h = backend._kernels(shape)
         self.stream = self.cuda.stream()
         self._staging = {}  # (slot, dtype, row shape) -> pinned host array that fetch copies into
         import numba

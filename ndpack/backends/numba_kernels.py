@@ -1,16 +1,17 @@
 """Per-point work of the Numba backends, shared by the CPU (prange) and CUDA (one thread each).
 
 This file is read as text, not imported: :func:`ndpack.kernels.compile.numba_namespace` runs it
-in the namespace of a shape's compiled program, where ``sd(p, prm)`` is the shape's signed
-distance, ``D`` the dimension, ``H`` the finite-difference step, and ``point()`` a local array of
-length ``D``. Every function mirrors a step of :class:`ndpack.backends.numpy_backend.NumpyBackend`,
+in the namespace of a compiled program, where ``sd(p, prm)`` is the signed distance of the shape
+whose numbers are ``prm``, ``D`` the dimension, and ``point()`` a local array of length ``D``. Every function mirrors a step of :class:`ndpack.backends.numpy_backend.NumpyBackend`,
 the reference it is tested against.
 
 Array arguments: ``points``, ``lower``, ``upper``, ``centers`` (n, D) float64; ``radii``,
-``steps``, ``prm`` 1-D float64; ``nbr`` (n, k) int64 neighbour table padded with ``len(radii)``.
+``steps``, ``prm`` 1-D float64; ``nbr`` (n, k) int64 neighbour table padded with ``len(radii)``;
+``h`` the finite-difference step (a fraction of the shape's size: an argument, so that a shape of
+another size runs the same compiled code).
 """
 
-# ruff: noqa: F821  (D, H, sd, sd_feature, sd_at, sd_slope and point exist where this text runs)
+# ruff: noqa: F821  (D, sd, sd_feature, sd_at, sd_slope and point exist where this text runs)
 
 
 def nearest_obstacle(x, prm, centers, radii, nbr, row, floor, hint):
@@ -64,28 +65,30 @@ def wall_floor(x, lower, upper, wall, cell):
     return wall[cell] - math.sqrt(length2)
 
 
-def free_space(x, g, prm, centers, radii, nbr, row, floor, hint):
+def free_space(x, g, prm, centers, radii, nbr, row, floor, hint, h, direction):
     """Clearance of ``x``, a lower bound of the boundary's distance and the boundary's nearest
-    feature (see :func:`nearest_obstacle`, which ``floor`` and ``hint`` are for); in ``g``, the
-    direction away from the nearest obstacle.
+    feature (see :func:`nearest_obstacle`, which ``floor`` and ``hint`` are for); in ``g``, where
+    ``direction`` is true, the direction away from the nearest obstacle.
 
     Away from the shape's boundary it is ``-grad sd``: closed-form from the nearest feature where
-    the shape has one (meshes, outlines), else by central differences of step ``H`` (the
+    the shape has one (meshes, outlines), else by central differences of step ``h`` (the
     reference uses the analytic gradient); away from a sphere, the unit vector from its centre.
     """
     clearance, nearest, boundary, feature = nearest_obstacle(x, prm, centers, radii, nbr, row, floor, hint)
+    if not direction:  # a clearance alone: no distance evaluated beyond x's own
+        return clearance, boundary, feature
     if nearest < 0 and feature >= 0.0:
         for k in range(D):
             g[k] = -sd_slope(x, prm, feature, -boundary, k)
     elif nearest < 0:
         for k in range(D):
             xk = x[k]
-            x[k] = xk + H
+            x[k] = xk + h
             up = sd(x, prm)
-            x[k] = xk - H
+            x[k] = xk - h
             down = sd(x, prm)
             x[k] = xk
-            g[k] = (down - up) / (2.0 * H)
+            g[k] = (down - up) / (2.0 * h)
     else:
         length2 = 0.0
         for k in range(D):
@@ -100,19 +103,19 @@ def free_space(x, g, prm, centers, radii, nbr, row, floor, hint):
     return clearance, boundary, feature
 
 
-def clearance_one(i, points, prm, centers, radii, nbr, out, out_direction):
+def clearance_one(i, points, prm, centers, radii, nbr, h, out, out_direction):
     """Clearance of point ``i`` into ``out``; its direction into ``out_direction`` if that has rows."""
     x = point()
     g = point()
     for k in range(D):
         x[k] = points[i, k]
-    out[i] = free_space(x, g, prm, centers, radii, nbr, i, -math.inf, -1.0)[0]
+    out[i] = free_space(x, g, prm, centers, radii, nbr, i, -math.inf, -1.0, h, out_direction.shape[0] > i)[0]
     if out_direction.shape[0] > i:
         for k in range(D):
             out_direction[i, k] = g[k]
 
 
-def converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, out_points,
+def converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, out_points,
                  out_clearance):
     """Converge point ``i`` in its cell (row ``i`` of every table), from the best of it and
     ``starts[:tries, i]``, into the outputs."""
@@ -122,7 +125,7 @@ def converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, rad
     for k in range(D):
         x[k] = points[i, k]
     best_start(x, g, starts, tries, i, i, lower, upper, wall, prm, centers, radii, nbr)
-    out_clearance[i] = converge_from(x, g, best, i, i, lower, upper, wall, prm, centers, radii, nbr, steps)
+    out_clearance[i] = converge_from(x, g, best, i, i, lower, upper, wall, prm, centers, radii, nbr, steps, h)
     for k in range(D):
         out_points[i, k] = best[k]
 
@@ -142,7 +145,7 @@ def best_start(x, g, starts, tries, cell, row, lower, upper, wall, prm, centers,
                     x[k] = g[k]
 
 
-def converge_from(x, g, best, cell, row, lower, upper, wall, prm, centers, radii, nbr, steps):
+def converge_from(x, g, best, cell, row, lower, upper, wall, prm, centers, radii, nbr, steps, h):
     """``p <- p + eps |c| g`` from ``x``, clipped to cell ``cell``, with neighbour row ``row``.
 
     Leaves the best point seen in ``best`` (as the reference does) and returns its clearance;
@@ -163,8 +166,8 @@ def converge_from(x, g, best, cell, row, lower, upper, wall, prm, centers, radii
         length2 = 0.0
         for k in range(D):
             length2 += (x[k] - anchor[k]) ** 2
-        floor = max(wall_floor(x, lower, upper, wall, cell), anchored - math.sqrt(length2) - 1e-3 * H)
-        c, boundary, feature = free_space(x, g, prm, centers, radii, nbr, row, floor, hint)
+        floor = max(wall_floor(x, lower, upper, wall, cell), anchored - math.sqrt(length2) - 1e-3 * h)
+        c, boundary, feature = free_space(x, g, prm, centers, radii, nbr, row, floor, hint, h, t < count)
         if feature >= 0.0:
             hint = feature
         if boundary > -math.inf:
@@ -183,7 +186,7 @@ def converge_from(x, g, best, cell, row, lower, upper, wall, prm, centers, radii
 
 
 def move_one(b, ids, starts, tries, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
-             steps, polish):
+             steps, h, polish):
     """Move prototype ``ids[b]`` in place: from the best of its point and ``starts[:tries, b]``,
     converge; keep the result (``polish`` 0), or keep it only if better and mark it polished (1)."""
     i = ids[b]
@@ -193,7 +196,7 @@ def move_one(b, ids, starts, tries, points, clearance, polished, lower, upper, w
     for k in range(D):
         x[k] = points[i, k]
     best_start(x, g, starts, tries, i, b, lower, upper, wall, prm, centers, radii, nbr)
-    c = converge_from(x, g, best, i, b, lower, upper, wall, prm, centers, radii, nbr, steps)
+    c = converge_from(x, g, best, i, b, lower, upper, wall, prm, centers, radii, nbr, steps, h)
     if polish == 0 or c > clearance[i]:
         clearance[i] = c
         for k in range(D):

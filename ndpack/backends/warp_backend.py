@@ -1,8 +1,9 @@
 """The NVIDIA Warp backend: one Warp thread per prototype, on ``cpu`` or ``cuda:N``.
 
-A shape's kernel program is printed in Warp's dialect and written, with the kernels of
-:mod:`ndpack.backends.warp_kernels`, into one generated module (see
-:func:`ndpack.kernels.compile.warp_module`); Warp compiles and caches it. The inserted spheres
+The tape interpreter of a dimension (:mod:`ndpack.kernels.tape`) is printed in Warp's dialect
+and written, with the kernels of :mod:`ndpack.backends.warp_kernels`, into one generated module
+(see :func:`ndpack.kernels.compile.warp_module`); Warp compiles it once per machine, for every
+shape of built-ins, and keeps the binary. A shape is its numbers, copied to the device once. The inserted spheres
 live on the device (:class:`~ndpack.backends.device_spheres.DeviceSpheres`), and during a
 packing so do the prototypes (:class:`~ndpack.backends.prototypes.DevicePrototypes`, through
 :class:`_WarpDevice`).
@@ -15,6 +16,7 @@ verified (and repaired) in float64 before it is returned.
 
 from __future__ import annotations
 
+import weakref
 from pathlib import Path
 
 import numpy as np
@@ -61,7 +63,8 @@ class WarpBackend(Backend):
         self.precision = precision
         self.margin = MARGIN[precision]
         self.float = np.float64 if precision == "float64" else np.float32
-        self._modules = {}
+        self._modules = {}  # id(program) -> (program, module)
+        self._params = weakref.WeakKeyDictionary()  # shape -> its numbers on the device
         self._spheres = {}
 
     def __repr__(self):
@@ -69,32 +72,38 @@ class WarpBackend(Backend):
 
     # ------------------------------------------------------------------ compilation
     def _module(self, shape):
+        """The compiled module that runs ``shape``, its numbers on the device and its
+        finite-difference step."""
+        flat = compiled_program(shape)
+        module = self._program_module(flat.program)
+        if shape not in self._params:
+            params = flat.params
+            if self.precision == "float32":
+                if params.size > 2**24:  # offsets are floats in the array: float32 counts exactly to 2^24
+                    raise BackendError(
+                        f"{shape!r} needs {params.size:,} numbers, more than float32 kernels can address; "
+                        "use precision='float64'")
+                if flat.device_values:
+                    params = params.copy()
+                    for offset, count, resolve in flat.device_values:
+                        params[offset:offset + count] = resolve(self.device)
+            self._params[shape] = self._array(params, module.F)
+        return module, self._params[shape], self.float(FD_STEP[self.precision] * shape.scale)
+
+    def _program_module(self, program):
+        """The backend's kernels and ``program`` as one Warp module, loaded on this device."""
         from ..kernels.compile import warp_module
 
-        program, params = compiled_program(shape)
-        key = id(program)
-        if key not in self._modules:
-            module = warp_module(program, self.precision, KERNELS)
-            self.wp.load_module(module, device=self.device)
-            h = self.float(FD_STEP[self.precision] * shape.scale)
-            if program.device_values and self.precision == "float32":
-                params = params.copy()
-                for offset, count, resolve in program.device_values:
-                    params[offset:offset + count] = resolve(self.device)
-            self._modules[key] = (program, module, self._array(params, module.F), h)
-        return self._modules[key][1:]
+        if id(program) not in self._modules:
+            self._modules[id(program)] = (program, warp_module(program, self.precision, KERNELS, self.device))
+        return self._modules[id(program)][1]
 
     def _geometry(self, dim):
-        """The module of the shape-free kernels (near_spheres, touched) for dimension ``dim``."""
-        from ..kernels.compile import warp_module
-        from ..kernels.program import shape_free
+        """The shape-free kernels (near_spheres, touched) for dimension ``dim``: those of the
+        tape interpreter's module, which the shapes of built-ins share."""
+        from ..kernels.tape import interpreter
 
-        key = ("shape-free", dim)
-        if key not in self._modules:
-            module = warp_module(shape_free(dim), self.precision, KERNELS)
-            self.wp.load_module(module, device=self.device)
-            self._modules[key] = (None, module)
-        return self._modules[key][1]
+        return self._program_module(interpreter(dim))
 
     # ------------------------------------------------------------------ arrays
     def _array(self, host, dtype):

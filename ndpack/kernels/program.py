@@ -1,10 +1,14 @@
-"""A shape as a kernel program: scalar functions in the kernel language plus flat parameters.
+"""A kernel program: scalar functions in the kernel language, printed for each compiler.
 
-Each oracle adds itself with ``_kernel(program) -> name``: it appends its numbers to the flat
-parameter array, uses library functions (:mod:`ndpack.kernels.library`) or defines small
-wrappers, and returns the name of a function ``name(p, prm)`` giving its signed distance.
-The program's text depends only on the shape's structure and dimension, never on its numbers,
-so equal structures share one compiled module (the cache key is that text).
+What the compiled backends run is a program. Usually it is the tape interpreter of a dimension
+(:mod:`ndpack.kernels.tape`), which takes any tree of built-in shapes as numbers. A shape can
+also be *specialised* (:func:`build`): each oracle adds itself with ``_kernel(program) ->
+name``, appending its numbers to the flat parameter array, using library functions
+(:mod:`ndpack.kernels.library`) or defining small wrappers, and returning the name of a function
+``name(p, prm)`` giving its signed distance. That text holds the tree's structure and the
+offsets of its numbers, so each new tree (and each mesh placed after other shapes) compiles
+again: it is an opt-in (``NDPACK_KERNELS=specialised``) and the fallback for trees too deep for
+the tape.
 """
 
 from __future__ import annotations
@@ -26,7 +30,7 @@ ENTRY = "sd"
 FEATURE, AT_FEATURE, SLOPE = "sd_feature", "sd_at", "sd_slope"
 #: What they are for a shape with no closed-form gradient: no feature (-1), so the backends take
 #: central differences of ``sd``; the compilers fold the constant away.
-_NO_GRADIENT = f"""def {FEATURE}(p, prm, hint: float, bound: float):
+NO_GRADIENT = f"""def {FEATURE}(p, prm, hint: float, bound: float):
     return -1.0
 
 
@@ -48,8 +52,12 @@ class Program:
         Dimension of the points.
     """
 
-    def __init__(self, dim: int):
+    def __init__(self, dim: int, title: str | None = None):
         self.dim = int(dim)
+        #: What the program is for, in a few words (generated modules start with it).
+        self.title = title or f"a {self.dim}-D shape"
+        #: Names of kernels that Numba's CPU compiler should inline into their (single) caller.
+        self.inline: set[str] = set()
         self.kernels: dict[str, Kernel] = {}
         self._chunks: list[np.ndarray] = []  # the parameters, as (k,) float64 pieces in order
         self._size = 0
@@ -181,14 +189,6 @@ class Program:
         return (params if params.size else np.zeros(1)).astype(dtype)
 
 
-def shape_free(dim: int) -> Program:
-    """A program whose ``sd`` is 0: what the shape-free kernels (near_spheres, touched) compile with."""
-    program = Program(dim)
-    program.kernels[ENTRY] = Kernel(f"def {ENTRY}(p, prm):\n    return 0.0\n")
-    _add_gradient_entries(program, None)
-    return program
-
-
 def build(shape) -> Program:
     """The kernel program of ``shape``, whose distance function is ``program.entry``.
 
@@ -197,7 +197,8 @@ def build(shape) -> Program:
     KernelError
         If a part of the shape has no scalar kernel (a NumPy-only plug-in).
     """
-    program = Program(shape.dim)
+    name = " ".join(repr(shape).split())
+    program = Program(shape.dim, f"{shape.dim}-D {name[:60]}{'...' if len(name) > 60 else ''} (specialised)")
     entry = program.shape(shape)
     program.kernels[ENTRY] = Kernel(f"def {ENTRY}(p, prm):\n    return {entry}(p, prm)\n", callees=program.kernels)
     _add_gradient_entries(program, program._gradients.get(id(shape)))
@@ -208,7 +209,7 @@ def _add_gradient_entries(program: Program, gradient) -> None:
     """Define ``sd_feature``, ``sd_at`` and ``sd_slope``: calls of the shape's ``gradient``
     functions (feature, at, slope), or the stubs that say there is none."""
     if gradient is None:
-        source = _NO_GRADIENT
+        source = NO_GRADIENT
     else:
         feature, at, slope = gradient
         source = (f"def {FEATURE}(p, prm, hint: float, bound: float):\n"

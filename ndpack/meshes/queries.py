@@ -58,7 +58,7 @@ def _namespace():
     """The compiled loops, one parallel and one serial version of each (compiled once, then loaded from disk)."""
     import numba
 
-    program = Program(3)
+    program = Program(3, "mesh queries")
     kernels.add_queries(program)
     for function in (kernels.nearest_element, kernels.triangle_query, kernels.mesh_winding_number):
         program.use(function)
@@ -69,7 +69,7 @@ def _namespace():
             parallel = not name.startswith("serial_")
             namespace[name] = numba.njit(parallel=parallel, cache=True)(namespace[name])
 
-    return numba_namespace(program, "cpu", _LOOPS + serial, {}, jit)
+    return numba_namespace(program, "cpu", _LOOPS + serial, jit)
 
 
 def _run(name: str, points: np.ndarray, *args):

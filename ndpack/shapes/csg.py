@@ -68,6 +68,24 @@ class _Boolean(Oracle):
         calls = ", ".join(f"{program.shape(child)}(p, prm)" for child in self.children)
         return program.define(f"def _(p, prm):\n    return {self._combine}({calls})\n")
 
+    def _tape(self, tape):
+        from ..kernels import tape as ops
+
+        # Nested nodes of the same kind are one n-ary node (min and max are associative and
+        # exact), so a chain a | b | c needs two values on the tape's stack, not one per level.
+        operands = self._operands()
+        tape.add(operands[0])
+        for child in operands[1:]:
+            tape.add(child)
+            tape.operation(ops.MIN if self._combine == "min" else ops.MAX)
+
+    def _operands(self):
+        """The children, with those of children of this very kind in their place."""
+        out = []
+        for child in self.children:
+            out.extend(child._operands() if type(child) is type(self) else [child])
+        return out
+
     def __repr__(self):
         return f"{type(self).__name__}({', '.join(map(repr, self.children))})"
 
@@ -133,6 +151,12 @@ class Complement(Oracle):
     def _kernel(self, program):
         return program.define(f"def _(p, prm):\n    return -{program.shape(self.child)}(p, prm)\n")
 
+    def _tape(self, tape):
+        from ..kernels.tape import NEGATE
+
+        tape.add(self.child)
+        tape.operation(NEGATE)
+
     def complement(self):
         return self.child
 
@@ -167,6 +191,13 @@ class Difference(Oracle):
     def _kernel(self, program):
         a, b = program.shape(self.a), program.shape(self.b)
         return program.define(f"def _(p, prm):\n    return max({a}(p, prm), -{b}(p, prm))\n")
+
+    def _tape(self, tape):
+        from ..kernels.tape import DIFFERENCE
+
+        tape.add(self.a)
+        tape.add(self.b)
+        tape.operation(DIFFERENCE)
 
     def __repr__(self):
         return f"({self.a!r} - {self.b!r})"
@@ -224,6 +255,10 @@ class Translate(_Transformed):
             f"    return {child}(q, prm)\n"
         )
 
+    def _tape(self, tape):
+        with tape.transformed(np.eye(self.dim), -self.offset):
+            tape.add(self.child)
+
     def __repr__(self):
         return f"{self.child!r}.translate({self.offset.tolist()})"
 
@@ -275,6 +310,11 @@ class Rotate(_Transformed):
             f"    return {child}(q, prm)\n"
         )
 
+    def _tape(self, tape):
+        # q = (p - c) M + c, as a column: M^T p + (c - M^T c).
+        with tape.transformed(self.matrix.T, self.center - self.matrix.T @ self.center):
+            tape.add(self.child)
+
     def __repr__(self):
         return f"{self.child!r}.rotate(...)"
 
@@ -310,6 +350,11 @@ class Scale(_Transformed):
             f"        q[i] = (p[i] - prm[{o} + i]) / factor + prm[{o} + i]\n"
             f"    return factor * {child}(q, prm)\n"
         )
+
+    def _tape(self, tape):
+        # q = (p - c) / s + c; the distance times s.
+        with tape.transformed(np.eye(self.dim) / self.factor, self.center - self.center / self.factor, self.factor):
+            tape.add(self.child)
 
     def __repr__(self):
         return f"{self.child!r}.scale_by({self.factor})"
@@ -349,6 +394,12 @@ class Offset(Oracle):
         child = program.shape(self.child)
         return program.define(f"def _(p, prm):\n    return {child}(p, prm) - prm[{o}]\n")
 
+    def _tape(self, tape):
+        from ..kernels.tape import OFFSET
+
+        tape.add(self.child)
+        tape.operation(OFFSET, self.amount)
+
     def __repr__(self):
         return f"{self.child!r}.offset({self.amount})"
 
@@ -379,6 +430,12 @@ class Shell(Oracle):
         o = program.add_params([self.thickness / 2])
         child = program.shape(self.child)
         return program.define(f"def _(p, prm):\n    return abs({child}(p, prm)) - prm[{o}]\n")
+
+    def _tape(self, tape):
+        from ..kernels.tape import SHELL
+
+        tape.add(self.child)
+        tape.operation(SHELL, self.thickness / 2)
 
     def __repr__(self):
         return f"{self.child!r}.shell({self.thickness})"
@@ -436,6 +493,13 @@ class SmoothUnion(Oracle):
             "    h = min(max(0.5 + (db - da) / (2.0 * k), 0.0), 1.0)\n"
             "    return h * da + (1.0 - h) * db - k * h * (1.0 - h)\n"
         )
+
+    def _tape(self, tape):
+        from ..kernels.tape import SMOOTH
+
+        tape.add(self.a)
+        tape.add(self.b)
+        tape.operation(SMOOTH, self.blend)
 
     def __repr__(self):
         return f"{self.a!r}.smooth_union({self.b!r}, {self.blend})"

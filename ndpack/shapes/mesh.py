@@ -192,6 +192,9 @@ class TriangleMesh(Oracle):
         kernels.add_gradient(program, self, offset)
         return program.define(f"def _(p, prm):\n    return {distance}(p, prm, {offset})\n")
 
+    def _tape(self, tape):
+        tape.surface(self._block, self._warp_mesh_id)
+
     def _warp_mesh_id(self, device) -> np.ndarray:
         """The 16-bit pieces of the id of this mesh's ``wp.Mesh`` on ``device`` (built once, kept)."""
         meshes = self.__dict__.setdefault("_warp_meshes", {})

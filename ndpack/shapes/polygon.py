@@ -290,13 +290,19 @@ class Polygon(Oracle):
         gradient = np.where(on_boundary[:, None], self._normal[nearest_edge], sign * away / safe)
         return distance, gradient
 
-    def _kernel(self, program):
-        # The edges in a segment hierarchy (ndpack.meshes), so a query costs about log(edges).
+    def _outline(self) -> np.ndarray:
+        """The edges in a segment hierarchy (ndpack.meshes), so a query costs about log(edges)."""
         block = self.__dict__.get("_outline_block")
         if block is None:
             block = self._outline_block = layout.pack_outline(
                 np.stack([self._start, self._end], axis=1), self._vertex_normals())
-        offset = program.add_params(layout.relocate(block, program.next_offset))
+        return block
+
+    def _tape(self, tape):
+        tape.surface(self._outline())
+
+    def _kernel(self, program):
+        offset = program.add_params(layout.relocate(self._outline(), program.next_offset))
         distance = kernels.add_queries(program)
         kernels.add_gradient(program, self, offset)
         return program.define(f"def _(p, prm):\n    return {distance}(p, prm, {offset})\n")

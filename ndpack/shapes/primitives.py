@@ -147,17 +147,24 @@ def _floats(array: np.ndarray) -> list:
     return np.asarray(array, dtype=np.float64).tolist()
 
 
-def _library_call(program, fn, values) -> str:
-    """Kernel of a shape whose distance is the library function ``fn`` on its ``values``."""
-    offset = program.add_params(values)
-    return program.define(f"def _(p, prm):\n    return {program.use(fn)}(p, prm, {offset})\n")
-
-
 class _Analytic(Oracle):
-    """Shared plumbing: the analytic gradient comes together with the distance."""
+    """Shared plumbing: the analytic gradient comes together with the distance, and the
+    compiled distance is a library kernel (:mod:`ndpack.kernels.library`) on the shape's numbers.
+
+    Subclasses define ``_leaf() -> (library function, values)``: the function and the
+    parameters in the layout its comment gives.
+    """
 
     def _gradient(self, points: np.ndarray) -> np.ndarray:
         return self._distance_and_gradient(points)[1]
+
+    def _tape(self, tape):
+        tape.leaf(*self._leaf())
+
+    def _kernel(self, program):
+        function, values = self._leaf()
+        offset = program.add_params(values)
+        return program.define(f"def _(p, prm):\n    return {program.use(function)}(p, prm, {offset})\n")
 
 
 # ---------------------------------------------------------------------- ball and boxes
@@ -193,9 +200,8 @@ class Ball(_Analytic):
     def _exact_volume(self):
         return float(ball_volume(self.dim, self.radius))
 
-    def _kernel(self, program):
-        offset = program.add_params([*self.center, self.radius])
-        return program.define(f"def _(p, prm):\n    return {program.use(library.ball)}(p, prm, {offset})\n")
+    def _leaf(self):
+        return library.ball, [*self.center, self.radius]
 
     def __repr__(self):
         return f"Ball(center={_floats(self.center)}, radius={self.radius!r})"
@@ -257,9 +263,8 @@ class Box(_Analytic):
     def _exact_volume(self):
         return float(np.prod(self.upper - self.lower))
 
-    def _kernel(self, program):
-        offset = program.add_params([*self._center, *self._half])
-        return program.define(f"def _(p, prm):\n    return {program.use(library.box)}(p, prm, {offset})\n")
+    def _leaf(self):
+        return library.box, [*self._center, *self._half]
 
     def __repr__(self):
         return f"Box(lower={_floats(self.lower)}, upper={_floats(self.upper)})"
@@ -321,8 +326,8 @@ class RoundedBox(_Analytic):
         d, r = self.dim, self.radius
         return float(sum(e[k] * ball_volume(d - k, 1.0) * r ** (d - k) for k in range(d + 1)))
 
-    def _kernel(self, program):
-        return _library_call(program, library.rounded_box, [*self._center, *self._inner_half, self.radius])
+    def _leaf(self):
+        return library.rounded_box, [*self._center, *self._inner_half, self.radius]
 
     def __repr__(self):
         return (
@@ -366,8 +371,8 @@ class HalfSpace(_Analytic):
     def _exact_volume(self):
         return math.inf
 
-    def _kernel(self, program):
-        return _library_call(program, library.half_space, [*self.normal, self.offset])
+    def _leaf(self):
+        return library.half_space, [*self.normal, self.offset]
 
     def __repr__(self):
         return f"HalfSpace(normal={_floats(self.normal)}, offset={self.offset!r})"
@@ -414,8 +419,8 @@ class Slab(_Analytic):
     def _exact_volume(self):
         return math.inf
 
-    def _kernel(self, program):
-        return _library_call(program, library.slab, [*self.normal, self._mid, self._half])
+    def _leaf(self):
+        return library.slab, [*self.normal, self._mid, self._half]
 
     def __repr__(self):
         return f"Slab(normal={_floats(self.normal)}, lower={self.lower!r}, upper={self.upper!r})"
@@ -477,9 +482,8 @@ class Capsule(_Analytic):
         d, r = self.dim, self.radius
         return float(ball_volume(d, r) + ball_volume(d - 1, r) * self.length)
 
-    def _kernel(self, program):
-        values = [*self.a, *self._ab, *self._axis, self._length_sq, self.radius]
-        return _library_call(program, library.capsule, values)
+    def _leaf(self):
+        return library.capsule, [*self.a, *self._ab, *self._axis, self._length_sq, self.radius]
 
     def __repr__(self):
         return f"Capsule(a={_floats(self.a)}, b={_floats(self.b)}, radius={self.radius!r})"
@@ -563,8 +567,8 @@ class Cylinder(_Analytic):
     def _exact_volume(self):
         return float(ball_volume(self.dim - 1, self.radius) * self.length)
 
-    def _kernel(self, program):
-        return _library_call(program, library.cylinder, [*self._mid, *self.axis, self.radius, self._half])
+    def _leaf(self):
+        return library.cylinder, [*self._mid, *self.axis, self.radius, self._half]
 
     def __repr__(self):
         return f"Cylinder(a={_floats(self.a)}, b={_floats(self.b)}, radius={self.radius!r})"
@@ -724,10 +728,9 @@ class ConvexPolytope(_Analytic):
         except QhullError:  # precision trouble with many nearly coplanar vertices
             return None
 
-    def _kernel(self, program):
-        # The count comes first, so the program text does not depend on it (Simplex inherits this).
-        values = [len(self.offsets), *self.normals.ravel(), *self.offsets]
-        return _library_call(program, library.polytope, values)
+    def _leaf(self):
+        # The count comes first, so the kernel reads it (Simplex inherits this).
+        return library.polytope, [len(self.offsets), *self.normals.ravel(), *self.offsets]
 
     def __repr__(self):
         if self.normals.size <= 64:
@@ -835,8 +838,8 @@ class Ellipsoid(_Analytic):
     def _exact_volume(self):
         return float(ball_volume(self.dim) * np.prod(self.radii))
 
-    def _kernel(self, program):
-        return _library_call(program, library.ellipsoid, [*self.center, *self.radii, self._min_radius])
+    def _leaf(self):
+        return library.ellipsoid, [*self.center, *self.radii, self._min_radius]
 
     def __repr__(self):
         return f"Ellipsoid(center={_floats(self.center)}, radii={_floats(self.radii)})"
@@ -908,8 +911,8 @@ class Torus(_Analytic):
     def _exact_volume(self):
         return 2 * math.pi**2 * self.major_radius * self.minor_radius**2
 
-    def _kernel(self, program):
-        return _library_call(program, library.torus, [*self.center, self.major_radius, self.minor_radius])
+    def _leaf(self):
+        return library.torus, [*self.center, self.major_radius, self.minor_radius]
 
     def __repr__(self):
         return (

@@ -144,11 +144,14 @@ class ScalarFunction(Function):
         from ..backends.base import compiled_program
         from ..kernels.compile import numba_evaluator
 
-        program, parameters = compiled_program(self)
+        flat = compiled_program(self)
         evaluate = self.__dict__.get("_evaluator")
         if evaluate is None:
-            evaluate = self.__dict__["_evaluator"] = numba_evaluator(program)
-        return evaluate(points, parameters)
+            evaluate = self.__dict__["_evaluator"] = numba_evaluator(flat.program)
+        return evaluate(points, flat.params)
+
+    def _tape(self, tape):
+        tape.user(self.kernel, self.params)
 
     def _kernel(self, program):
         offset = program.add_params(self.params)
