@@ -85,14 +85,31 @@ def _pack_new_shapes(folder, backend, device="-", **env):
     return json.loads(result.stdout.strip().splitlines()[-1])
 
 
+def _gpu(name: str) -> bool:
+    """Whether ``name`` runs on a real GPU here (the GPU machine; never in CI)."""
+    from ndpack import backends
+
+    if os.environ.get("NUMBA_ENABLE_CUDASIM") == "1":
+        return False
+    try:
+        backend = backends.get_backend(name, device="cuda:0")
+    except Exception:  # noqa: BLE001 - no driver, no device, not installed
+        return False
+    return name != "warp" or backend.device.is_cuda
+
+
 @pytest.mark.parametrize("backend, device, env", [
     ("numba", "-", {}),
     ("warp", "cpu", {}),
     ("numba-cuda", "-", {"NUMBA_ENABLE_CUDASIM": "1"}),
-], ids=["numba", "warp-cpu", "numba-cuda-simulator"])
+    ("warp", "cuda:0", {}),
+    ("numba-cuda", "cuda:0", {}),
+], ids=["numba", "warp-cpu", "numba-cuda-simulator", "warp-cuda", "numba-cuda-gpu"])
 def test_new_sizes_trees_meshes_and_plugin_tapes_compile_nothing(tmp_path, backend, device, env):
     if backend == "warp":
         pytest.importorskip("warp")
+    if device == "cuda:0" and not _gpu(backend):
+        pytest.skip("no CUDA GPU here")
     counts = _pack_new_shapes(tmp_path, backend, device, **env)
     # The first uses made modules (loaded from disk or compiled, as this machine's cache has it);
     # after them, nothing new: no module, no compile.
