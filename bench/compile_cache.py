@@ -76,13 +76,19 @@ def main(argv=None) -> int:
     parser.add_argument("--mesh", help="the first mesh (default: tests/data/meshes/cow.ply)")
     parser.add_argument("-n", type=int, default=200, help="spheres per packing (default 200)")
     parser.add_argument("--out", help="JSON file for the rows")
+    parser.add_argument("--cache", help="a new folder for the caches, kept afterwards (default: a temporary one "
+                        "per backend, removed)")
     args = parser.parse_args(argv)
 
     rows = []
-    for backend in args.backends:
-        with tempfile.TemporaryDirectory(prefix="ndpack-cache-") as cache:
+    for number, backend in enumerate(args.backends):
+        with tempfile.TemporaryDirectory(prefix="ndpack-cache-") as temporary:
+            # Each backend from a fresh cache; with --cache, one folder per backend inside it.
+            cache = os.path.join(args.cache, str(number)) if args.cache else temporary
+            if os.path.exists(cache) and os.listdir(cache):
+                parser.error(f"{cache} is not empty: the first processes would not start from a fresh cache")
             folder = Path(cache) / "shapes"
-            folder.mkdir()
+            folder.mkdir(parents=True)
             print(f"\n{backend}: fresh cache, {args.n} spheres, fast mode, whole processes")
             print(f"  {'shape':16s} {'first':>8s} {'warm':>8s} {'ratio':>6s}  compiled in the first")
             for label, spec in scenario(args.scenario, folder, args.mesh):

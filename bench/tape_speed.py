@@ -152,8 +152,8 @@ def main(argv=None) -> int:
                   f"{result['tape_distances_per_s'] / result['specialised_distances_per_s']:6.2f} "
                   f"{result['tape_pack_s']:8.2f}s {result['specialised_pack_s']:9.2f}s "
                   f"{result['tape_pack_s'] / result['specialised_pack_s']:6.2f}", flush=True)
-    if args.out:
-        write_json(Path(args.out), {"machine": machine_info(), "args": vars(args), "rows": rows})
+            if args.out:  # after each row: a run cut short keeps what it measured
+                write_json(Path(args.out), {"machine": machine_info(), "args": vars(args), "rows": rows})
     return 0
 
 

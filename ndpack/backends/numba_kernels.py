@@ -81,14 +81,18 @@ def free_space(x, g, prm, centers, radii, nbr, row, floor, hint, h, direction):
         for k in range(D):
             g[k] = -sd_slope(x, prm, feature, -boundary, k)
     elif nearest < 0:
-        for k in range(D):
+        # (down - up) / 2h per axis, with one call of sd in the loop: the compilers inline it
+        # once, not twice (the shape's whole interpreter: half the code to compile).
+        for m in range(2 * D):
+            k = m // 2
             xk = x[k]
-            x[k] = xk + h
-            up = sd(x, prm)
-            x[k] = xk - h
-            down = sd(x, prm)
+            x[k] = xk + h if m % 2 == 0 else xk - h
+            value = sd(x, prm)
             x[k] = xk
-            g[k] = (down - up) / (2.0 * h)
+            if m % 2 == 0:
+                g[k] = -value
+            else:
+                g[k] = (g[k] + value) / (2.0 * h)
     else:
         length2 = 0.0
         for k in range(D):
