@@ -130,9 +130,10 @@ class _NumbaListener:
         if module is None:
             return
         COMPILES[self.kind] = COMPILES.get(self.kind, 0) + 1
-        if module not in self.announced:
-            self.announced.add(module)
-            announce(self.kind, _titles.get(module, "shapes"))
+        title = _titles.get(module, "shapes")
+        if title not in self.announced:  # one line per kind of kernels, however many modules
+            self.announced.add(title)
+            announce(self.kind, title)
         if self.depth == 0:
             self.started = time.perf_counter()
         self.depth += 1
@@ -184,9 +185,10 @@ class CudaKernel:
             module = getattr(getattr(self.kernel, "py_func", None), "__module__", "")
             if not self._cached():
                 COMPILES["numba-cuda"] = COMPILES.get("numba-cuda", 0) + 1
-                if module not in _announced_cuda:
-                    _announced_cuda.add(module)
-                    announce("numba-cuda", _titles.get(module, "shapes"))
+                title = _titles.get(module, "shapes")
+                if title not in _announced_cuda:
+                    _announced_cuda.add(title)
+                    announce("numba-cuda", title)
         return self.kernel[config]
 
     def _cached(self) -> bool:
