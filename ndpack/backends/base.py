@@ -199,11 +199,13 @@ def compiled_program(shape):
     made = shape.__dict__.setdefault("_ndpack_flat", {})
     if mode not in made:
         try:
-            try:
-                if mode != "tape":
-                    raise TapeTooDeep("asked for specialised kernels")
-                flat = flatten(shape)
-            except TapeTooDeep:
+            flat = None
+            if mode == "tape":
+                try:
+                    flat = flatten(shape)
+                except TapeTooDeep:  # compiled for itself instead
+                    pass
+            if flat is None:
                 program = build(shape)
                 flat = Flat(program, program.param_array(), program.device_values)
         except KernelError as error:

@@ -83,8 +83,9 @@ def _import_generated(text: str, kind: str):
 
 # ---------------------------------------------------------------------------------- notices
 def announce(kind: str, what: str) -> None:
-    """Say, once per process and module, that ``kind`` ("numba", "numba-cuda" or "warp") is
-    compiling ``what``: how long it took here before (or typically), and where it is kept."""
+    """Say that ``kind`` ("numba", "numba-cuda" or "warp") is compiling ``what`` (the callers say
+    it once per process and kind of kernels): about how long the longest such compile took on
+    this machine before (or typically), and where the result is kept."""
     seconds = _measured().get(kind, TYPICAL_SECONDS[kind])
     notice(f"compiling {kind} kernels for {what} (first use on this machine, about {seconds:.0f} s; "
            f"kept in {cache_folder('numba').parent} for next time)")
@@ -109,8 +110,9 @@ def _record(kind: str, seconds: float) -> None:
 
 
 class _NumbaListener:
-    """Numba's ``numba:compile`` events for ndpack's generated modules: the first one of a
-    module announces it; every one is counted; outermost durations add up to the estimate."""
+    """Numba's ``numba:compile`` events for ndpack's generated modules: the first one of a kind
+    of kernels (a module's title) announces it; every one is counted; the outermost durations of
+    a module add up to the next notice's estimate."""
 
     def __init__(self, kind: str):
         self.kind = kind
