@@ -20,19 +20,20 @@ import time
 import numpy as np
 
 import ndpack as nd
-from ndpack import protosphere
+from ndpack import protosphere, rounds
 
 #: Driver phases timed inclusively: (owner, attribute name).
 PHASES = [
-    (protosphere._ProtoSphere, "choose_window"),
-    (protosphere._ProtoSphere, "reconverge"),
-    (protosphere._ProtoSphere, "refine"),
-    (protosphere._ProtoSphere, "_split"),
-    (protosphere._ProtoSphere, "_distance"),
-    (protosphere._ProtoSphere, "insert"),
-    (protosphere._ProtoSphere, "revive"),
+    (rounds.Fast, "choose"),
+    (protosphere.RunState, "reconverge"),
+    (protosphere.RunState, "polish"),
+    (rounds.Fast, "refine"),
+    (rounds.Fast, "_split"),
+    (protosphere.RunState, "_distance"),
+    (protosphere.RunState, "insert"),
+    (protosphere.RunState, "revive"),
     (protosphere, "nearest_sphere"),
-    (protosphere, "disjoint_greedy"),
+    (rounds, "disjoint_greedy"),
 ]
 
 

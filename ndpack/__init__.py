@@ -26,7 +26,7 @@ from .errors import (
 )
 from .oracle import Oracle, Volume, ball_volume
 from .packing import Packing, RoundStats
-from .protosphere import pack
+from .protosphere import Round, pack
 from .rotation import rotation
 from .shapes import *  # noqa: F401,F403  (the shape classes, listed in shapes.__all__)
 from .shapes import __all__ as _shape_names
@@ -36,6 +36,6 @@ __version__ = "0.1.0"
 
 __all__ = [
     "BackendError", "BoundsError", "KernelError", "DimensionError", "InvalidPackingError", "MeshWarning", "NdpackError", "OracleError", "Oracle",
-    "Packing", "ParameterError", "RepairWarning", "RoundStats", "ShapeError", "Verification", "Volume",
+    "Packing", "ParameterError", "RepairWarning", "Round", "RoundStats", "ShapeError", "Verification", "Volume",
     "ball_volume", "pack", "rotation", "verify", *_shape_names,
 ]

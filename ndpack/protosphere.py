@@ -23,15 +23,18 @@ from __future__ import annotations
 import sys
 import time
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 from tqdm.auto import tqdm
 
 from .backends import get_backend
-from .backends.prototypes import best_starts, top_order
+from .backends.prototypes import best_starts
+from .conflicts import nearest_sphere
 from .errors import InvalidPackingError, ParameterError, RepairWarning, ShapeError
 from .oracle import Oracle, ball_volume, check_compatible, check_packable
 from .packing import Packing, RoundStats
+from .rounds import FAST_WINDOW, POLISH_WINDOW, SPLIT_RATIO, Fast, Faithful
 from .shapes.adapters import as_oracle
 from .shapes.plugin import check_plugin_slopes
 from .verify import verify
@@ -47,38 +50,13 @@ EPS_START, EPS_END, COOLING_POWER = 0.5, 2e-6, 2.0
 #: becomes a sphere: the paper's 50 steps leave errors up to 1e-2 in 4D and above, because a
 #: zig-zag towards a Voronoi node advances only a fraction of each step.
 POLISH_ITERATIONS, POLISH_EPS_START, POLISH_EPS_END, POLISH_POWER = 100, 0.05, 1e-7, 1.0
-#: Candidates within this fraction of the best clearance are polished.
-POLISH_WINDOW = 0.05
 #: A prototype swallowed by a new sphere may restart this factor of its radius from its centre.
 PUSH_OUT = 1.001
 #: Random starts per cell when dead prototypes are revived, before the driver gives up for room.
 REVIVE_TRIES, REVIVE_CHUNK = 32, 2048
-#: Fast mode stops splitting cells at this many prototypes (memory).
-MAX_PROTOTYPES = 16_000_000
 #: Radii are shrunk by this fraction of the shape's scale, so that float64 rounding in the
 #: distances (about 1e-16 of the scale) can never make touching spheres overlap or poke out.
 SAFETY_MARGIN = 1e-10
-#: Fast mode: candidates within this fraction of the largest clearance become spheres in one round
-#: (those disjoint from the larger ones kept). 0.2 takes half the rounds of 0.1 for 0.07-0.17% less
-#: fill (unit cube and armadillo at 100,000 spheres; docs/benchmarks.md); 0.3 loses 0.3%.
-FAST_WINDOW = 0.2
-#: Fast mode: a cell splits in two (across its longest side) while that side is longer than this
-#: many times the largest clearance and the cell could still hold a candidate, so that the gaps
-#: being filled are never much smaller than the cells that search for them.
-SPLIT_RATIO = 4.0
-#: Fast mode: fewer candidates than this at the top, late finds at the last round's size,
-#: join the next level's round (:meth:`_ProtoSphere.choose_window`): 26-36% fewer rounds for 0.03-0.05%
-#: less fill in the armadillo at 40,000, 70,000 and 150,000 spheres, 29-43% fewer and within 0.01%
-#: in the unit cube at 30,000 and 100,000 (2 cores; docs/benchmarks.md).
-SMALL_ROUND = 64
-#: Fast mode: at most this many candidates a round (bounds the host's conflict check).
-MAX_CANDIDATES = 1 << 16
-#: More new spheres than this: :func:`nearest_sphere` searches a k-d tree (among each point's
-#: ``NEAREST_CANDIDATES`` nearest centres first) instead of testing all.
-NEAREST_BY_SEARCH, NEAREST_CANDIDATES = 64, 16
-#: Fast mode: the conflict check and the nearest new sphere search for this many largest spheres
-#: apart (see :func:`_few_largest`).
-FEW_LARGE = 64
 #: The cells' walls (lower bounds of the boundary's distance, which let deep prototypes skip
 #: the shape's distance) are lowered by this many safety margins: far above the rounding of a
 #: distance, so a skipped evaluation never changes a result.
@@ -142,8 +120,13 @@ def _check_parameters(n, min_radius, fill, time_budget, iterations, batch, resta
         raise ParameterError(f"time_budget must be a positive number of seconds, got {time_budget!r}")
 
 
-class _ProtoSphere:
-    """The state of one packing run: prototypes, their cells, and the spheres so far."""
+class RunState:
+    """The state of one packing run: prototypes, their cells, and the spheres so far.
+
+    What both round strategies (:mod:`ndpack.rounds`) work on: the prototype store
+    (``prototypes``), the spheres (:attr:`spheres`), and the moves the algorithm makes
+    (:meth:`reconverge`, :meth:`polish`, :meth:`settle`, :meth:`revive`, :meth:`insert`).
+    """
 
     def __init__(self, shape, backend, counts, iterations, restarts, rng):
         self.shape = shape
@@ -159,8 +142,6 @@ class _ProtoSphere:
         self.centers = np.empty((64, self.dim))
         self.radii = np.empty(64)
         self.rounds = np.empty(64, dtype=np.int64)
-        # Fast mode: the last round's frontier (largest clearance, late finds aside).
-        self.frontier = np.inf
         self._place_prototypes(counts)
 
     # ------------------------------------------------------------------ prototypes
@@ -205,9 +186,15 @@ class _ProtoSphere:
         self.prototypes = self.backend.prototypes(
             self.shape, cells["lower"], cells["upper"], cells["reach"], points, clearance, cells["wall"]
         )
-        # The fast mode's refinement keeps, per cell, its longest side and a clearance bound.
-        self._longest = (cells["upper"] - cells["lower"]).max(axis=1)
-        self._bound = cells["reach"].copy()
+
+    def cell_bounds(self, lower, upper):
+        """For cells ``lower``, ``upper`` (k, d): their centres (k, d), an upper bound of any
+        clearance inside each (k,) and a lower bound of the boundary's distance at each centre,
+        less a slack for rounding (k,); the distance is 1-Lipschitz."""
+        centres = 0.5 * (lower + upper)
+        centre_distance = self._distance(centres)
+        half_diagonal = 0.5 * np.linalg.norm(upper - lower, axis=1)
+        return centres, -centre_distance + half_diagonal, -centre_distance - WALL_SLACK * self.margin
 
     def _distance(self, points):
         """The shape's signed distance at ``points`` (k, d): (k,) float64, on the backend where it
@@ -256,6 +243,18 @@ class _ProtoSphere:
         starts = self._candidate_starts(first, ids, tries)
         self.prototypes.move(ids, *self.spheres, self.steps, starts=starts if len(starts) else None)
 
+    def polish(self, ids):
+        """Move prototypes ``ids`` further with the finer polish schedule, keeping each one's
+        new place only where its clearance grew."""
+        self.prototypes.move(ids, *self.spheres, self.polish_steps, polish=True)
+
+    def settle(self, new_centers, new_radii):
+        """After new spheres (k, d), (k,): the prototypes whose clearance ball they meet
+        converge again (the others keep their nearest obstacle, so nothing changes for them)."""
+        touched, points = self.prototypes.touched(new_centers, new_radii)
+        if len(touched):
+            self.reconverge(touched, points, new_centers, new_radii)
+
     def revive(self):
         """Restart the dead prototypes (no free start found) with fresh random points; how many live."""
         dead, _ = self.prototypes.select(high=self.margin)
@@ -264,128 +263,6 @@ class _ProtoSphere:
         for start in range(0, len(dead), REVIVE_CHUNK):  # bounded memory for any grid
             self.reconverge(dead[start : start + REVIVE_CHUNK], tries=REVIVE_TRIES)
         return int(np.count_nonzero(self.prototypes.gather(dead)[1] > self.margin))
-
-    def leaders(self, take):
-        """The ``take`` largest clearances after polishing, largest first: ids (k,), clearances
-        (k,) and points (k, d).
-
-        Every unpolished prototype within ``POLISH_WINDOW`` of the ``take``-th best is polished
-        first. Clearances are attained values, so polishing only raises them: once the leaders are
-        all polished, the largest clearance is the best Voronoi node to the polish accuracy.
-        """
-        while True:
-            ids, clearance, points, unpolished = self.prototypes.leaders(take, POLISH_WINDOW)
-            if len(unpolished) == 0:
-                return ids, clearance, points
-            self.prototypes.move(unpolished, *self.spheres, self.polish_steps, polish=True)
-
-    # ------------------------------------------------------------------ spheres
-    def choose(self, batch, min_radius, room):
-        """Up to ``batch`` mutually disjoint candidates, largest first: ((k, d), (k,))."""
-        _, clearance, centers = self.leaders(min(batch, room))
-        radii = clearance - self.margin
-        large_enough = radii >= max(min_radius, self.margin)
-        centers, radii = centers[large_enough], radii[large_enough]
-        chosen = []
-        for i in range(len(radii)):
-            # Same-round candidates know nothing of each other: keep those clear of the ones kept.
-            if all(np.linalg.norm(centers[i] - centers[j]) >= radii[i] + radii[j] + self.margin for j in chosen):
-                chosen.append(i)
-        return centers[chosen], radii[chosen]
-
-    def choose_window(self, window, min_radius, room):
-        """Fast mode: every candidate within ``window`` below the frontier or above it, largest
-        first, kept where it is disjoint from the larger ones kept: ((k, d), (k,)).
-
-        The frontier is the largest clearance, unless fewer than ``SMALL_ROUND`` candidates lie
-        within the window below it and they reach the last round's window: gaps found late (in
-        split cells, by restarts) at the last round's size. Those join the next level's round
-        (the frontier is the largest clearance below them) instead of taking a round alone.
-        Every unpolished prototype in the window (and ``POLISH_WINDOW`` below it) is polished first.
-        """
-        store = self.prototypes
-        while True:
-            top = store.top()
-            if top <= 0:
-                return np.empty((0, self.dim)), np.empty(0)
-            frontier = top
-            if top >= (1 - window) * self.frontier and len(store.select(low=(1 - window) * top)[0]) < SMALL_ROUND:
-                below = store.top(below=(1 - window) * top)
-                frontier = below if below > 0 else top
-            unpolished, _ = store.select(low=(1 - window - POLISH_WINDOW) * frontier, unpolished=True)
-            if len(unpolished) == 0:
-                break
-            store.move(unpolished, *self.spheres, self.polish_steps, polish=True)
-        self.frontier = frontier
-        ids, clearance = store.select(low=(1 - window) * frontier)
-        order = top_order(ids, clearance, min(MAX_CANDIDATES, len(ids)))
-        centers, clearance = self.prototypes.gather(ids[order])
-        radii = clearance - self.margin
-        large_enough = radii >= max(min_radius, self.margin)
-        centers, radii = centers[large_enough], radii[large_enough]
-        chosen = disjoint_greedy(centers, radii, self.margin)[:room]
-        return centers[chosen], radii[chosen]
-
-    def refine(self, top, window, ratio=SPLIT_RATIO):
-        """Fast mode: split in two, across their longest side, the cells longer than ``ratio``
-        times ``top`` (the round's frontier, see :meth:`choose_window`) whose clearance bound
-        reaches the candidates' window; the new halves' prototypes converge. Repeats on the halves; how many split.
-
-        Work per round follows the cells that may split, not all cells: each cell's longest side
-        and an upper bound of its clearance are kept on the host. The bound stays valid as
-        spheres arrive (clearances only shrink), so a cell is looked at again only once the
-        window has come down to it.
-        """
-        store = self.prototypes
-        total = 0
-        for _ in range(4 * self.dim):
-            low = (1 - window) * top
-            ids = np.flatnonzero((self._longest > max(ratio * top, 1e3 * self.margin)) & (self._bound >= low))
-            if len(ids) == 0:
-                break
-            points, clearance = store.gather(ids)
-            lower, upper = store.cell_lower[ids], store.cell_upper[ids]
-            # Clearance is 1-Lipschitz: nowhere in the cell above the prototype's plus the way
-            # to the farthest corner (tighter than the stored reach for cells not moved lately).
-            farthest = np.maximum(points - lower, upper - points)
-            bound = np.minimum(store.reach[ids], clearance + np.linalg.norm(farthest, axis=1))
-            self._bound[ids] = np.minimum(self._bound[ids], bound)
-            keep = bound >= low
-            ids = ids[keep][: max(0, MAX_PROTOTYPES - len(store))]
-            if len(ids) == 0:
-                break
-            new = self._split(ids, points[keep][: len(ids)], (upper - lower)[keep][: len(ids)])
-            changed = np.concatenate([ids, new])
-            self._longest = np.concatenate([self._longest, np.empty(len(new))])
-            self._bound = np.concatenate([self._bound, np.empty(len(new))])
-            self._longest[changed] = (store.cell_upper[changed] - store.cell_lower[changed]).max(axis=1)
-            self._bound[changed] = store.reach[changed]
-            total += len(ids)
-        return total
-
-    def _split(self, ids, points, sides):
-        """Split cells ``ids`` in two across their longest side; the half that holds the prototype
-        (``points``) keeps it, still a local maximum there, and the other half gets a new one."""
-        store = self.prototypes
-        rows, axis = np.arange(len(ids)), np.argmax(sides, axis=1)
-        lower, upper = store.cell_lower[ids], store.cell_upper[ids]
-        middle = 0.5 * (lower[rows, axis] + upper[rows, axis])
-        low_half = points[rows, axis] < middle
-        kept_lower, kept_upper, other_lower, other_upper = lower.copy(), upper.copy(), lower.copy(), upper.copy()
-        kept_upper[rows, axis] = np.where(low_half, middle, upper[rows, axis])
-        kept_lower[rows, axis] = np.where(low_half, lower[rows, axis], middle)
-        other_lower[rows, axis] = np.where(low_half, middle, lower[rows, axis])
-        other_upper[rows, axis] = np.where(low_half, upper[rows, axis], middle)
-        new_lower, new_upper = np.concatenate([kept_lower, other_lower]), np.concatenate([kept_upper, other_upper])
-        centres = 0.5 * (new_lower + new_upper)
-        centre_distance = self._distance(centres)
-        half_diagonal = 0.5 * np.linalg.norm(new_upper - new_lower, axis=1)
-        reach = np.minimum(np.tile(store.reach[ids], 2), -centre_distance + half_diagonal)
-        wall = -centre_distance - WALL_SLACK * self.margin
-        new = store.split(ids, new_lower, new_upper, reach, wall, centres[len(ids):], np.full(len(ids), -np.inf))
-        for start in range(0, len(new), 8 * REVIVE_CHUNK):  # bounded memory for the random starts
-            self.reconverge(new[start : start + 8 * REVIVE_CHUNK])
-        return new
 
     def insert(self, centers, radii, round_index):
         needed = self.count + len(radii)
@@ -398,102 +275,6 @@ class _ProtoSphere:
         self.radii[self.count:needed] = radii
         self.rounds[self.count:needed] = round_index
         self.count = needed  # last, so an interrupt never leaves half a sphere
-
-
-def _few_largest(radii):
-    """The few largest of ``radii`` (k,): their positions (at most ``FEW_LARGE``, none among
-    few spheres) and the largest radius of the rest.
-
-    A fast-mode round can hold a few spheres far larger than the rest (gaps found late): searched
-    for apart, they do not widen every other sphere's search to their size.
-    """
-    if len(radii) <= 4 * FEW_LARGE:
-        return np.empty(0, dtype=np.int64), float(radii.max())
-    rest = len(radii) - FEW_LARGE - 1
-    cut = float(np.partition(radii, rest)[rest])
-    return np.flatnonzero(radii > cut), cut
-
-
-def _widened(reach):
-    """A search radius widened past the rounding of the k-d tree's distances."""
-    return reach + 1e-9 * np.abs(reach)
-
-
-def nearest_sphere(points, centers, radii):
-    """Per point (n, d), the sphere (``centers`` (k, d), ``radii`` (k,)) with the smallest gap
-    ``|p - c| - r``, the first of equals: (n,) int64.
-
-    Many spheres (a fast-mode round): among each point's 16 nearest centres, and where a farther
-    sphere could still be nearer (its radius larger), among all that could; the few largest
-    spheres are tested for every point.
-    """
-    if len(radii) <= NEAREST_BY_SEARCH:
-        offsets = points[:, None, :] - centers  # (n, k, d)
-        return np.argmin(np.linalg.norm(offsets, axis=2) - radii, axis=1)
-    from scipy.spatial import cKDTree
-
-    large, largest = _few_largest(radii)
-    rest = np.setdiff1d(np.arange(len(radii)), large)
-    tree = cKDTree(centers[rest])
-    distance, near = tree.query(points, k=NEAREST_CANDIDATES)
-    near = rest[near]
-    gaps = distance - radii[near]
-    # Smallest gap, the lowest id among equals (as argmin over all spheres in id order).
-    best_gap = gaps.min(axis=1)
-    best = np.where(gaps == best_gap[:, None], near, len(radii)).min(axis=1)
-    # A sphere farther than the k-th nearest centre has a gap of at least that less the largest
-    # radius: where that could beat the best found, search the ball that holds every rival.
-    unsure = np.flatnonzero(distance[:, -1] - largest <= best_gap)
-    reach = _widened(best_gap[unsure] + largest) + 1e-9 * largest
-    for i, rivals in zip(unsure, tree.query_ball_point(points[unsure], reach)):
-        rivals = np.unique(np.append(rest[np.asarray(rivals, dtype=np.int64)], best[i]))
-        best[i] = rivals[np.argmin(np.linalg.norm(points[i] - centers[rivals], axis=1) - radii[rivals])]
-    for start in range(0, len(points) if len(large) else 0, 4096):  # the few largest, against every point
-        rows = slice(start, start + 4096)
-        candidates = np.concatenate([best[rows, None], np.broadcast_to(large, (len(best[rows]), len(large)))], axis=1)
-        candidates.sort(axis=1)  # argmin takes the first of equals: the lowest id
-        gap = np.linalg.norm(points[rows, None] - centers[candidates], axis=2) - radii[candidates]
-        best[rows] = candidates[np.arange(len(candidates)), np.argmin(gap, axis=1)]
-    return best
-
-
-def disjoint_greedy(centers, radii, margin):
-    """Positions of a greedy disjoint subset: each sphere is kept unless it comes within
-    ``margin`` of one kept before it. ``centers`` (k, d), ``radii`` (k,) in priority order.
-
-    Returns (j,) int64 positions, ascending.
-    """
-    from scipy.spatial import cKDTree
-
-    count = len(radii)
-    if count <= 1:
-        return np.arange(count)
-    tree = cKDTree(centers)
-    # Pairs that may meet: two of the rest within twice their largest radius, and each of the
-    # few largest with any sphere within its radius and the largest.
-    large, largest = _few_largest(radii)
-    pairs = [tree.query_pairs(_widened(2 * largest + margin), output_type="ndarray")]
-    if len(large):
-        partners = tree.query_ball_point(centers[large], _widened(radii[large] + radii.max() + margin))
-        lengths = [len(found) for found in partners]
-        pairs.append(np.stack([np.repeat(large, lengths), np.concatenate(partners).astype(np.int64)], axis=1))
-    pairs = np.concatenate(pairs)
-    if len(pairs) == 0:
-        return np.arange(count)
-    first, second = pairs.min(axis=1), pairs.max(axis=1)
-    gap = np.linalg.norm(centers[first] - centers[second], axis=1) - radii[first] - radii[second]
-    meet = (gap < margin) & (first != second)
-    first, second = first[meet], second[meet]
-    order = np.argsort(first, kind="stable")
-    first, second = first[order], second[order]
-    starts = np.searchsorted(first, np.arange(count + 1))
-    blocked = np.zeros(count, dtype=bool)
-    kept = []
-    for i in range(count):  # the sequential greedy rule; pairs are few and sorted by the larger
-        if not blocked[i]:
-            kept.append(i)
-            blocked[second[starts[i] : starts[i + 1]]] = True
-    return np.array(kept, dtype=np.int64)
 
 
 def pack(
@@ -513,6 +294,7 @@ def pack(
     device=None,
     progress: bool | None = None,
     on_invalid: str | None = None,
+    on_round=None,
 ) -> Packing:
     """Fill ``shape`` with non-overlapping spheres, largest first (ProtoSphere).
 
@@ -559,6 +341,9 @@ def pack(
         backend): ``"repair"`` shrinks or drops those spheres, warns (:class:`RepairWarning`)
         and records it in :attr:`Packing.repair`; ``"raise"`` raises
         :class:`InvalidPackingError`. Default: ``$NDPACK_ON_INVALID``, else ``"repair"``.
+    on_round : callable, optional
+        Called after each round with a :class:`Round` (the new spheres, count, fill, time): to
+        watch a run, plot it as it goes, or stop it (return True: ``stop_reason == "callback"``).
 
     Returns
     -------
@@ -585,6 +370,8 @@ def pack(
             f"batch={batch!r} applies to the faithful mode only: the fast mode takes every candidate "
             f"within {FAST_WINDOW:.0%} of the largest a round; drop batch or use mode='faithful'"
         )
+    if on_round is not None and not callable(on_round):
+        raise ParameterError(f"on_round must be a function of one argument (an ndpack.Round), got {on_round!r}")
     check_packable(shape)
     check_plugin_slopes(shape)
     backend = get_backend(backend, device=device, shape=shape)
@@ -598,67 +385,34 @@ def pack(
         fast_window=FAST_WINDOW, split_ratio=SPLIT_RATIO,
     )
     started = time.perf_counter()
-    state = _ProtoSphere(shape, backend, counts, int(iterations), int(restarts), np.random.default_rng(seed))
+    state = RunState(shape, backend, counts, int(iterations), int(restarts), np.random.default_rng(seed))
     volume = shape.volume()
     if not volume.value > 0:
         raise ShapeError(
             f"the volume of {shape!r} came out as {volume.value:g}: the shape is too thin for a "
             "Monte Carlo estimate over its bounds; tighten the bounds or give the shape an exact volume"
         )
+    strategy = Fast(state) if mode == "fast" else Faithful(int(batch))
     medial_axis, medial_radii = state.prototypes.all()
-    times, totals, fills = [], [], []
-    covered = 0.0
-    stop_reason = "count"
-    fast = mode == "fast"
-    if fast:
-        def choose(min_radius, room):
-            return state.choose_window(FAST_WINDOW, min_radius, room)
-    else:
-        def choose(min_radius, room):
-            return state.choose(int(batch), min_radius, room)
+    stats = []  # (seconds, count, fill) after each round
     show = sys.stderr.isatty() if progress is None else progress
     bar = tqdm(total=int(n), unit="sphere", disable=not show, dynamic_ncols=True)
     try:
-        while True:
-            if state.count >= n:
-                stop_reason = "count"
-                break
-            if fill is not None and covered / volume.value >= fill:
-                stop_reason = "fill"
-                break
-            if time_budget is not None and time.perf_counter() - started >= time_budget:
-                stop_reason = "time"
-                break
-            centers, radii = choose(min_radius, int(n) - state.count)
-            if len(radii) == 0 and state.revive():
-                centers, radii = choose(min_radius, int(n) - state.count)
-            if len(radii) == 0:
-                stop_reason = "min_radius" if min_radius > 0 else "no_room"
-                break
-            state.insert(centers, radii, len(times))
-            covered += float(ball_volume(state.dim, radii).sum())
-            touched, points = state.prototypes.touched(centers, radii)
-            if len(touched):
-                state.reconverge(touched, points, centers, radii)
-            if fast and state.count < n:  # no splits for a round that will not come
-                state.refine(state.frontier, FAST_WINDOW)
-            times.append(time.perf_counter() - started)
-            totals.append(state.count)
-            fills.append(covered / volume.value)
-            bar.update(len(radii))
-            bar.set_postfix(fill=f"{fills[-1]:.4f}", refresh=False)
+        stop_reason = _run_rounds(state, strategy, int(n), float(min_radius), fill, time_budget, volume.value,
+                                  started, stats, bar, on_round)
     except KeyboardInterrupt:
         stop_reason = "interrupted"
     finally:
         bar.close()
-    rounds = min(len(times), len(totals), len(fills))
+    times, totals, fills = (np.array(column) for column in zip(*stats)) if stats else ([], [], [])
     packing = Packing(
         centers=state.centers[: state.count].copy(),
         radii=state.radii[: state.count].copy(),
         rounds=state.rounds[: state.count].copy(),
         volume=volume.value,
         volume_error=volume.error,
-        stats=RoundStats(np.array(times[:rounds]), np.array(totals[:rounds], dtype=np.int64), np.array(fills[:rounds])),
+        stats=RoundStats(np.asarray(times, dtype=np.float64), np.asarray(totals, dtype=np.int64),
+                         np.asarray(fills, dtype=np.float64)),
         medial_axis=medial_axis,
         medial_radii=medial_radii,
         params=params,
@@ -666,6 +420,64 @@ def pack(
         shape=shape,
     )
     return _ensure_valid(packing, shape, state.margin, getattr(backend, "precision", "float64"), on_invalid)
+
+
+@dataclass(frozen=True)
+class Round:
+    """What :func:`pack` tells its ``on_round`` function after each round.
+
+    Attributes
+    ----------
+    index : int
+        The round, from 0.
+    centers : (k, d) float64 and radii : (k,) float64
+        The spheres this round placed, largest first.
+    count : int
+        Spheres placed so far.
+    fill : float
+        Fraction of the shape's volume they cover.
+    seconds : float
+        Since the run started (prototype placement included).
+    state : RunState
+        The run itself (prototypes, cells, spheres), to look at, not to change.
+    """
+
+    index: int
+    centers: np.ndarray
+    radii: np.ndarray
+    count: int
+    fill: float
+    seconds: float
+    state: RunState
+
+
+def _run_rounds(state, strategy, n, min_radius, fill, time_budget, volume, started, stats, bar, on_round):
+    """The rounds of one run, until a limit; returns why it stopped. Appends each round's
+    (seconds, count, fill) to ``stats``, whole, so that an interrupt leaves whole rows."""
+    covered = 0.0
+    while True:
+        if state.count >= n:
+            return "count"
+        if fill is not None and covered / volume >= fill:
+            return "fill"
+        if time_budget is not None and time.perf_counter() - started >= time_budget:
+            return "time"
+        centers, radii = strategy.choose(state, min_radius, n - state.count)
+        if len(radii) == 0 and state.revive():
+            centers, radii = strategy.choose(state, min_radius, n - state.count)
+        if len(radii) == 0:
+            return "min_radius" if min_radius > 0 else "no_room"
+        state.insert(centers, radii, len(stats))
+        covered += float(ball_volume(state.dim, radii).sum())
+        state.settle(centers, radii)
+        if state.count < n:  # nothing to prepare for a round that will not come
+            strategy.after_round(state)
+        stats.append((time.perf_counter() - started, state.count, covered / volume))
+        bar.update(len(radii))
+        bar.set_postfix(fill=f"{covered / volume:.4f}", refresh=False)
+        if on_round is not None and on_round(Round(len(stats) - 1, centers, radii, state.count, covered / volume,
+                                                   stats[-1][0], state)):
+            return "callback"
 
 
 def _on_invalid(value: str | None) -> str:

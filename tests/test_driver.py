@@ -149,23 +149,34 @@ def test_medial_axis_of_a_rectangle():
     assert on_axis.sum() >= 0.8 * 40 * 0.8 / 2
 
 
-def test_interrupt_keeps_what_was_packed(monkeypatch):
-    from ndpack import protosphere
-
-    original = protosphere._ProtoSphere.reconverge
-    calls = {"count": 0}
-
-    def interrupted_on_the_fifth_round(self, *args, **kwargs):
-        calls["count"] += 1
-        if calls["count"] == 5:
+def test_interrupt_keeps_what_was_packed():
+    def interrupted_in_the_fifth_round(round):
+        if round.index == 4:
             raise KeyboardInterrupt  # what Ctrl-C raises
-        return original(self, *args, **kwargs)
 
-    monkeypatch.setattr(protosphere._ProtoSphere, "reconverge", interrupted_on_the_fifth_round)
-    packing = nd.pack(nd.Box([0, 0], [1, 1]), n=1000, seed=0)
+    packing = nd.pack(nd.Box([0, 0], [1, 1]), n=1000, seed=0, on_round=interrupted_in_the_fifth_round)
     assert packing.stop_reason == "interrupted"
     assert len(packing) == 5 and packing.verify().ok
-    assert len(packing.stats.count) == 4
+    assert len(packing.stats.count) == 5
+
+
+def test_on_round_sees_every_round_and_can_stop_the_run():
+    rounds = []
+
+    def watch(round):
+        rounds.append(round)
+        return round.count >= 40
+
+    packing = nd.pack(nd.Box([0, 0], [1, 1]), n=1000, mode="fast", backend="numba", on_round=watch)
+    assert packing.stop_reason == "callback"
+    assert [r.index for r in rounds] == list(range(len(rounds)))
+    assert rounds[-1].count == len(packing) >= 40 > rounds[-2].count
+    # The rounds' spheres are the packing's, in order, and the fill and counts are its stats.
+    np.testing.assert_array_equal(np.concatenate([r.radii for r in rounds]), packing.radii)
+    np.testing.assert_array_equal([r.count for r in rounds], packing.stats.count)
+    np.testing.assert_allclose([r.fill for r in rounds], packing.stats.fill)
+    with pytest.raises(nd.ParameterError, match="on_round must be a function"):
+        nd.pack(nd.Box([0, 0], [1, 1]), n=3, on_round=3)
 
 
 def test_invalid_spheres_are_repaired_before_they_are_returned():

@@ -6,7 +6,7 @@ import pytest
 import ndpack as nd
 from ndpack.backends.numba_backend import INDEX_NEW_SPHERES, NumbaBackend
 from ndpack.backends.numpy_backend import NumpyBackend
-from ndpack.protosphere import disjoint_greedy, nearest_sphere
+from ndpack.conflicts import disjoint_greedy, nearest_sphere
 
 REFERENCE = NumpyBackend()
 
@@ -118,19 +118,10 @@ def test_fast_mode_finds_the_exact_cube_radii(dim):
     assert len(np.unique(np.round(packing.centers[1:]), axis=0)) == 2**dim
 
 
-def test_fast_mode_splits_cells_and_the_cells_still_tile_the_grid(monkeypatch):
-    import ndpack.protosphere as protosphere
-
+def test_fast_mode_splits_cells_and_the_cells_still_tile_the_grid():
     shape = nd.Box(np.zeros(2), np.ones(2))
     states = []
-    original = protosphere._ProtoSphere.__init__
-
-    def keep(self, *args, **kwargs):
-        original(self, *args, **kwargs)
-        states.append(self)
-
-    monkeypatch.setattr(protosphere._ProtoSphere, "__init__", keep)
-    packing = nd.pack(shape, 4000, mode="fast", backend="numba", grid=16)
+    packing = nd.pack(shape, 4000, mode="fast", backend="numba", grid=16, on_round=lambda round: states.append(round.state))
     store = states[0].prototypes
     assert len(store) > 16 * 16  # cells split where the gaps became small
     sizes = store.cell_upper - store.cell_lower

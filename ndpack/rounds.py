@@ -1,0 +1,201 @@
+"""How a round chooses its spheres: the two strategies of the ProtoSphere driver.
+
+The driver (:func:`ndpack.protosphere.pack`) runs the same loop in both modes: choose spheres,
+insert them, let the prototypes they touched converge again, then whatever the strategy does
+after a round. A strategy is an object with two methods over the run's state
+(:class:`ndpack.protosphere.RunState`):
+
+``choose(state, min_radius, room) -> (centers (k, d), radii (k,))``
+    The spheres of this round, largest first, mutually disjoint, at most ``room``, none below
+    ``min_radius``; none when no prototype has room.
+``after_round(state)``
+    Work between rounds (the fast mode splits cells here); not called after the last round.
+
+:class:`Faithful` is the paper's round on a fixed grid; :class:`Fast` takes a window of
+candidates a round and refines the grid where gaps have become small. Only the fast mode keeps
+per-cell bookkeeping, so a faithful run builds none of it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .backends.prototypes import top_order
+from .conflicts import disjoint_greedy
+
+#: Candidates within this fraction of the best clearance are polished (moved further, with a
+#: finer schedule) before any of them becomes a sphere.
+POLISH_WINDOW = 0.05
+#: Fast mode: candidates within this fraction of the largest clearance become spheres in one round
+#: (those disjoint from the larger ones kept). 0.2 takes half the rounds of 0.1 for 0.07-0.17% less
+#: fill (unit cube and armadillo at 100,000 spheres; docs/benchmarks.md); 0.3 loses 0.3%.
+FAST_WINDOW = 0.2
+#: Fast mode: a cell splits in two (across its longest side) while that side is longer than this
+#: many times the largest clearance and the cell could still hold a candidate, so that the gaps
+#: being filled are never much smaller than the cells that search for them.
+SPLIT_RATIO = 4.0
+#: Fast mode: fewer candidates than this at the top, late finds at the last round's size,
+#: join the next level's round (:meth:`Fast.choose`): 26-36% fewer rounds for 0.03-0.05%
+#: less fill in the armadillo at 40,000, 70,000 and 150,000 spheres, 29-43% fewer and within 0.01%
+#: in the unit cube at 30,000 and 100,000 (2 cores; docs/benchmarks.md).
+SMALL_ROUND = 64
+#: Fast mode: at most this many candidates a round (bounds the host's conflict check).
+MAX_CANDIDATES = 1 << 16
+#: Fast mode stops splitting cells at this many prototypes (memory).
+MAX_PROTOTYPES = 16_000_000
+#: New prototypes of split cells converge in chunks of this many (bounded memory for their starts).
+SPLIT_CHUNK = 16_384
+
+
+def _large_enough(state, centers, clearance, min_radius):
+    """Candidates as spheres: radii are clearances less the safety margin; those below
+    ``min_radius`` (or the margin) dropped. ((k, d), (k,))."""
+    radii = clearance - state.margin
+    keep = radii >= max(min_radius, state.margin)
+    return centers[keep], radii[keep]
+
+
+class Faithful:
+    """The paper's round: the largest clearance becomes a sphere, or up to ``batch`` of the
+    largest that are mutually disjoint, largest first (``batch = 1``: the exact greedy order)."""
+
+    name = "faithful"
+
+    def __init__(self, batch: int = 1):
+        self.batch = batch
+
+    def leaders(self, state, take):
+        """The ``take`` largest clearances after polishing, largest first: ids (k,), clearances
+        (k,) and points (k, d).
+
+        Every unpolished prototype within ``POLISH_WINDOW`` of the ``take``-th best is polished
+        first. Clearances are attained values, so polishing only raises them: once the leaders are
+        all polished, the largest clearance is the best Voronoi node to the polish accuracy.
+        """
+        while True:
+            ids, clearance, points, unpolished = state.prototypes.leaders(take, POLISH_WINDOW)
+            if len(unpolished) == 0:
+                return ids, clearance, points
+            state.polish(unpolished)
+
+    def choose(self, state, min_radius, room):
+        _, clearance, centers = self.leaders(state, min(self.batch, room))
+        centers, radii = _large_enough(state, centers, clearance, min_radius)
+        chosen = []
+        for i in range(len(radii)):
+            # Same-round candidates know nothing of each other: keep those clear of the ones kept.
+            if all(np.linalg.norm(centers[i] - centers[j]) >= radii[i] + radii[j] + state.margin for j in chosen):
+                chosen.append(i)
+        return centers[chosen], radii[chosen]
+
+    def after_round(self, state):
+        pass
+
+
+class Fast:
+    """Fast mode: every candidate within ``window`` of the frontier becomes a sphere where it is
+    disjoint from the larger ones, and cells split where their gaps have become small.
+
+    Keeps, per cell, its longest side and an upper bound of its clearance (so that a round
+    looks only at cells that may split), and the last round's frontier.
+    """
+
+    name = "fast"
+
+    def __init__(self, state, window: float = FAST_WINDOW, ratio: float = SPLIT_RATIO):
+        self.window, self.ratio = window, ratio
+        store = state.prototypes
+        self.frontier = np.inf  # the last round's largest clearance, late finds aside
+        self.longest = (store.cell_upper - store.cell_lower).max(axis=1)
+        self.bound = store.reach.copy()
+
+    def choose(self, state, min_radius, room):
+        """Every candidate within the window below the frontier or above it, largest first, kept
+        where it is disjoint from the larger ones kept.
+
+        The frontier is the largest clearance, unless fewer than ``SMALL_ROUND`` candidates lie
+        within the window below it and they reach the last round's window: gaps found late (in
+        split cells, by restarts) at the last round's size. Those join the next level's round
+        (the frontier is the largest clearance below them) instead of taking a round alone.
+        Every unpolished prototype in the window (and ``POLISH_WINDOW`` below it) is polished first.
+        """
+        store, window = state.prototypes, self.window
+        while True:
+            top = store.top()
+            if top <= 0:
+                return np.empty((0, state.dim)), np.empty(0)
+            frontier = top
+            if top >= (1 - window) * self.frontier and len(store.select(low=(1 - window) * top)[0]) < SMALL_ROUND:
+                below = store.top(below=(1 - window) * top)
+                frontier = below if below > 0 else top
+            unpolished, _ = store.select(low=(1 - window - POLISH_WINDOW) * frontier, unpolished=True)
+            if len(unpolished) == 0:
+                break
+            state.polish(unpolished)
+        self.frontier = frontier
+        ids, clearance = store.select(low=(1 - window) * frontier)
+        order = top_order(ids, clearance, min(MAX_CANDIDATES, len(ids)))
+        centers, clearance = store.gather(ids[order])
+        centers, radii = _large_enough(state, centers, clearance, min_radius)
+        chosen = disjoint_greedy(centers, radii, state.margin)[:room]
+        return centers[chosen], radii[chosen]
+
+    def after_round(self, state):
+        self.refine(state)
+
+    def refine(self, state):
+        """Split in two, across their longest side, the cells longer than ``ratio`` times the
+        round's frontier whose clearance bound reaches the candidates' window; the new halves'
+        prototypes converge. Repeats on the halves; returns how many split.
+
+        Work per round follows the cells that may split, not all cells. The bound stays valid as
+        spheres arrive (clearances only shrink), so a cell is looked at again only once the
+        window has come down to it.
+        """
+        store, top = state.prototypes, self.frontier
+        total = 0
+        for _ in range(4 * state.dim):
+            low = (1 - self.window) * top
+            ids = np.flatnonzero((self.longest > max(self.ratio * top, 1e3 * state.margin)) & (self.bound >= low))
+            if len(ids) == 0:
+                break
+            points, clearance = store.gather(ids)
+            lower, upper = store.cell_lower[ids], store.cell_upper[ids]
+            # Clearance is 1-Lipschitz: nowhere in the cell above the prototype's plus the way
+            # to the farthest corner (tighter than the stored reach for cells not moved lately).
+            farthest = np.maximum(points - lower, upper - points)
+            bound = np.minimum(store.reach[ids], clearance + np.linalg.norm(farthest, axis=1))
+            self.bound[ids] = np.minimum(self.bound[ids], bound)
+            keep = bound >= low
+            ids = ids[keep][: max(0, MAX_PROTOTYPES - len(store))]
+            if len(ids) == 0:
+                break
+            new = self._split(state, ids, points[keep][: len(ids)], (upper - lower)[keep][: len(ids)])
+            changed = np.concatenate([ids, new])
+            self.longest = np.concatenate([self.longest, np.empty(len(new))])
+            self.bound = np.concatenate([self.bound, np.empty(len(new))])
+            self.longest[changed] = (store.cell_upper[changed] - store.cell_lower[changed]).max(axis=1)
+            self.bound[changed] = store.reach[changed]
+            total += len(ids)
+        return total
+
+    def _split(self, state, ids, points, sides):
+        """Split cells ``ids`` in two across their longest side; the half that holds the prototype
+        (``points``) keeps it, still a local maximum there, and the other half gets a new one."""
+        store = state.prototypes
+        rows, axis = np.arange(len(ids)), np.argmax(sides, axis=1)
+        lower, upper = store.cell_lower[ids], store.cell_upper[ids]
+        middle = 0.5 * (lower[rows, axis] + upper[rows, axis])
+        low_half = points[rows, axis] < middle
+        kept_lower, kept_upper, other_lower, other_upper = lower.copy(), upper.copy(), lower.copy(), upper.copy()
+        kept_upper[rows, axis] = np.where(low_half, middle, upper[rows, axis])
+        kept_lower[rows, axis] = np.where(low_half, lower[rows, axis], middle)
+        other_lower[rows, axis] = np.where(low_half, middle, lower[rows, axis])
+        other_upper[rows, axis] = np.where(low_half, upper[rows, axis], middle)
+        new_lower, new_upper = np.concatenate([kept_lower, other_lower]), np.concatenate([kept_upper, other_upper])
+        centres, reach, wall = state.cell_bounds(new_lower, new_upper)
+        reach = np.minimum(np.tile(store.reach[ids], 2), reach)
+        new = store.split(ids, new_lower, new_upper, reach, wall, centres[len(ids):], np.full(len(ids), -np.inf))
+        for start in range(0, len(new), SPLIT_CHUNK):
+            state.reconverge(new[start : start + SPLIT_CHUNK])
+        return new
