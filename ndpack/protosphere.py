@@ -471,7 +471,7 @@ def _run_rounds(state, strategy, n, min_radius, fill, time_budget, volume, start
         covered += float(ball_volume(state.dim, radii).sum())
         state.settle(centers, radii)
         if state.count < n:  # nothing to prepare for a round that will not come
-            strategy.after_round(state)
+            strategy.after_round(state, n - state.count)
         stats.append((time.perf_counter() - started, state.count, covered / volume))
         bar.update(len(radii))
         bar.set_postfix(fill=f"{covered / volume:.4f}", refresh=False)

@@ -8,8 +8,9 @@ after a round. A strategy is an object with two methods over the run's state
 ``choose(state, min_radius, room) -> (centers (k, d), radii (k,))``
     The spheres of this round, largest first, mutually disjoint, at most ``room``, none below
     ``min_radius``; none when no prototype has room.
-``after_round(state)``
-    Work between rounds (the fast mode splits cells here); not called after the last round.
+``after_round(state, room)``
+    Work between rounds (the fast mode splits cells here), knowing that at most ``room`` more
+    spheres are wanted; not called after the last round.
 
 :class:`Faithful` is the paper's round on a fixed grid; :class:`Fast` takes a window of
 candidates a round and refines the grid where gaps have become small. Only the fast mode keeps
@@ -39,10 +40,16 @@ SPLIT_RATIO = 4.0
 #: less fill in the armadillo at 40,000, 70,000 and 150,000 spheres, 29-43% fewer and within 0.01%
 #: in the unit cube at 30,000 and 100,000 (2 cores; docs/benchmarks.md).
 SMALL_ROUND = 64
+#: Fast mode: rounds of polishing the chosen candidates before the choice is made among the
+#: polished ones only (:meth:`Fast.choose`).
+POLISH_PASSES = 2
 #: Fast mode: at most this many candidates a round (bounds the host's conflict check).
 MAX_CANDIDATES = 1 << 16
 #: Fast mode stops splitting cells at this many prototypes (memory).
 MAX_PROTOTYPES = 16_000_000
+#: Fast mode: at most this many cells split after a round per sphere still wanted (``n`` less
+#: those placed), so that the last rounds, which want few spheres, split few cells.
+SPLITS_PER_SPHERE = 8
 #: New prototypes of split cells converge in chunks of this many (bounded memory for their starts).
 SPLIT_CHUNK = 16_384
 
@@ -88,7 +95,7 @@ class Faithful:
                 chosen.append(i)
         return centers[chosen], radii[chosen]
 
-    def after_round(self, state):
+    def after_round(self, state, room):
         pass
 
 
@@ -117,9 +124,15 @@ class Fast:
         within the window below it and they reach the last round's window: gaps found late (in
         split cells, by restarts) at the last round's size. Those join the next level's round
         (the frontier is the largest clearance below them) instead of taking a round alone.
-        Every unpolished prototype in the window (and ``POLISH_WINDOW`` below it) is polished first.
+
+        Only the candidates the choice keeps are polished, and the choice is made again with
+        their polished clearances: a candidate that a larger one blocks is touched by that
+        sphere and converges again anyway, so polishing it would be lost. After
+        ``POLISH_PASSES`` passes the choice is made among polished candidates only (the others
+        wait for the next round).
         """
         store, window = state.prototypes, self.window
+        passes = 0
         while True:
             top = store.top()
             if top <= 0:
@@ -128,29 +141,38 @@ class Fast:
             if top >= (1 - window) * self.frontier and len(store.select(low=(1 - window) * top)[0]) < SMALL_ROUND:
                 below = store.top(below=(1 - window) * top)
                 frontier = below if below > 0 else top
-            unpolished, _ = store.select(low=(1 - window - POLISH_WINDOW) * frontier, unpolished=True)
-            if len(unpolished) == 0:
+            ids, clearance, points, polished = store.candidates(low=(1 - window) * frontier)
+            order = top_order(ids, clearance, min(MAX_CANDIDATES, len(ids)))
+            ids, clearance, points, polished = ids[order], clearance[order], points[order], polished[order]
+            radii = clearance - state.margin
+            usable = np.flatnonzero(radii >= max(min_radius, state.margin))
+            chosen = usable[disjoint_greedy(points[usable], radii[usable], state.margin)[:room]]
+            waiting = ids[chosen[~polished[chosen]]]
+            if len(waiting) == 0:
                 break
-            state.polish(unpolished)
+            if passes >= POLISH_PASSES:
+                ready = usable[polished[usable]]
+                chosen = ready[disjoint_greedy(points[ready], radii[ready], state.margin)[:room]]
+                if len(chosen):
+                    break
+            state.polish(np.sort(waiting))
+            passes += 1
         self.frontier = frontier
-        ids, clearance = store.select(low=(1 - window) * frontier)
-        order = top_order(ids, clearance, min(MAX_CANDIDATES, len(ids)))
-        centers, clearance = store.gather(ids[order])
-        centers, radii = _large_enough(state, centers, clearance, min_radius)
-        chosen = disjoint_greedy(centers, radii, state.margin)[:room]
-        return centers[chosen], radii[chosen]
+        return points[chosen], radii[chosen]
 
-    def after_round(self, state):
-        self.refine(state)
+    def after_round(self, state, room):
+        self.refine(state, SPLITS_PER_SPHERE * room)
 
-    def refine(self, state):
+    def refine(self, state, most=None):
         """Split in two, across their longest side, the cells longer than ``ratio`` times the
         round's frontier whose clearance bound reaches the candidates' window; the new halves'
         prototypes converge. Repeats on the halves; returns how many split.
 
         Work per round follows the cells that may split, not all cells. The bound stays valid as
         spheres arrive (clearances only shrink), so a cell is looked at again only once the
-        window has come down to it.
+        window has come down to it. At most ``most`` cells split, those of the largest bounds first
+        (the others wait, their bounds kept): the last rounds of a run want few spheres, and a
+        level of cells split for them would cost more than they do.
         """
         store, top = state.prototypes, self.frontier
         total = 0
@@ -166,11 +188,16 @@ class Fast:
             farthest = np.maximum(points - lower, upper - points)
             bound = np.minimum(store.reach[ids], clearance + np.linalg.norm(farthest, axis=1))
             self.bound[ids] = np.minimum(self.bound[ids], bound)
-            keep = bound >= low
-            ids = ids[keep][: max(0, MAX_PROTOTYPES - len(store))]
+            keep = np.flatnonzero(bound >= low)
+            allowed = max(0, MAX_PROTOTYPES - len(store))
+            if most is not None:
+                allowed = min(allowed, most - total)
+            if len(keep) > allowed:  # the largest bounds first
+                keep = np.sort(keep[np.argsort(-bound[keep], kind="stable")[:allowed]])
+            ids = ids[keep]
             if len(ids) == 0:
                 break
-            new = self._split(state, ids, points[keep][: len(ids)], (upper - lower)[keep][: len(ids)])
+            new = self._split(state, ids, points[keep], (upper - lower)[keep])
             changed = np.concatenate([ids, new])
             self.longest = np.concatenate([self.longest, np.empty(len(new))])
             self.bound = np.concatenate([self.bound, np.empty(len(new))])

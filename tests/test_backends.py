@@ -231,6 +231,8 @@ def _exercise(store, centers, radii, rng):
     store.move(unpolished, centers, radii, cooling_schedule(40, 0.05, 1e-7, 1.0), polish=True)
     answers["after_polish"] = store.all()
     answers["unpolished"] = store.select(unpolished=True)[0]
+    answers["candidates"] = store.candidates(low=0.5 * store.top())
+    assert answers["candidates"][3].any() and not answers["candidates"][3].all()  # polished and not
     answers["low"] = store.select(high=0.02)
     # The largest clearance, and the largest below the 10th largest (the fast mode's frontier).
     tenth = np.sort(store.all()[1])[-10]

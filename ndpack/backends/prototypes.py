@@ -91,6 +91,12 @@ class Prototypes:
         """The largest clearance below ``below``; -inf where none is."""
         raise NotImplementedError
 
+    def candidates(self, low):
+        """The prototypes with clearance ``>= low``, with what a round needs to choose among them:
+        ids (m,) int64 ascending, clearances (m,) float64, points (m, d) float64 and whether each
+        is polished (m,) bool."""
+        raise NotImplementedError
+
     def leaders(self, k: int, window: float):
         """The ``k`` largest clearances (fewer if n < k), largest first, and the unpolished near them.
 
@@ -165,6 +171,10 @@ class HostPrototypes(Prototypes):
 
     def top(self, below=np.inf):
         return float(np.max(self.clearance, where=self.clearance < below, initial=-np.inf))
+
+    def candidates(self, low):
+        ids = np.flatnonzero(self.clearance >= low)
+        return ids, self.clearance[ids], self.points[ids], self.polished[ids]
 
     def leaders(self, k, window):
         k = min(k, len(self))
@@ -308,6 +318,10 @@ class DevicePrototypes(Prototypes):
     def select(self, low=-np.inf, high=np.inf, unpolished=False):
         ids, clearance, _, _, _ = self._select(low, high, unpolished)
         return ids, clearance
+
+    def candidates(self, low):
+        ids, clearance, points, polished, _ = self._select(low)
+        return ids, clearance, points, polished != 0
 
     def top(self, below=np.inf):
         self.device.fill(self.d_top, -np.inf)

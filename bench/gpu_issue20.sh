@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Issue 20 (the GPU must pay) on the GPU machine, after the set-up runs (.gpu1, then .gpu2). .gpu4
+# carries the 100k-triangle armadillo (armadillo.obj.xz) and the code before the issue
+# (before/: ndpack and bench/profile_kernels.py of commit b7017d9, from `git archive`).
+#   source .gpu2/setup.sh && bash bench/gpu_issue20.sh time      100,000 spheres in the armadillo,
+#       before and now, Warp (cuda:0), numba-cuda and numba on the host's cores (bench/round_time.py)
+#   source .gpu2/setup.sh && bash bench/gpu_issue20.sh profile   the per-round profile, before and now
+#       (bench/profile_kernels.py), on both GPU backends
+#   source .gpu2/setup.sh && bash bench/gpu_issue20.sh tests     the GPU backends' tests
+set -uo pipefail
+OUT=${OUT:-/tmp/out}
+mkdir -p "$OUT"
+export PYTHONUNBUFFERED=1
+nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader | tee "$OUT/gpu.txt"
+echo "cores: $(nproc)" | tee -a "$OUT/gpu.txt"
+python3 -c "import numba, numba_cuda, warp, numpy; print('numba', numba.__version__, 'numba-cuda', numba_cuda.__version__, 'warp', warp.__version__, 'numpy', numpy.__version__)" 2>&1 | grep -v "^Warp" | tee -a "$OUT/gpu.txt"
+[ -f /tmp/armadillo.obj ] || xz -dc .gpu4/armadillo.obj.xz > /tmp/armadillo.obj
+# Both versions compile the same kernel text, so they share one cache, kept between the parts.
+export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
+BEFORE=$PWD/.gpu4/before
+case "${1:-time}" in
+  time)
+    timeout 570 python3 bench/round_time.py --mesh /tmp/armadillo.obj --count 100000 --backends warp numba-cuda numba \
+      --versions before="$BEFORE" now=. --repeats 2 --out "$OUT/round_time_h100.json" 2>&1 | grep -v "^Warp\|^Module" \
+      | tee "$OUT/round_time.txt" ;;
+  profile)
+    PYTHONPATH=$BEFORE:${PYTHONPATH:-} timeout 280 python3 "$BEFORE/bench/profile_kernels.py" --backends warp numba-cuda \
+      --mesh /tmp/armadillo.obj --count 100000 --out "$OUT/profile_before_h100.json" 2>&1 | grep -v "^Warp\|^Module" \
+      | tee "$OUT/profile_before.txt"
+    timeout 280 python3 bench/profile_kernels.py --backends warp numba-cuda --mesh /tmp/armadillo.obj --count 100000 \
+      --out "$OUT/profile_now_h100.json" 2>&1 | grep -v "^Warp\|^Module" | tee "$OUT/profile_now.txt" ;;
+  tests)
+    timeout 570 python3 -m pytest -q -p no:cacheprovider tests/test_backends.py tests/test_scale.py tests/test_driver.py \
+      -k "numba-cuda or warp or cuda or fast" 2>&1 | tail -15 | tee "$OUT/tests.txt" ;;
+  *) echo "unknown part $1: time, profile or tests" >&2; exit 2 ;;
+esac
