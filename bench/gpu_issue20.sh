@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # Issue 20 (the GPU must pay) on the GPU machine, after the set-up runs (.gpu1, then .gpu2). .gpu4
 # carries the 100k-triangle armadillo (armadillo.obj.xz) and the code before the issue
-# (before/: ndpack and bench/profile_kernels.py of commit b7017d9, from `git archive`).
+# (before/: ndpack and bench/profile_kernels.py of commit b7017d9), made here with
+#   mkdir -p .gpu4/before && git archive b7017d9 ndpack bench/profile_kernels.py | tar -x -C .gpu4/before
+#   xz -9 -c ../shared/data/meshes/armadillo.obj > .gpu4/armadillo.obj.xz && echo /.gpu4/ >> .git/info/exclude
+# and carried with .gpu2 (carry: [".gpu2", ".gpu4"]).
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh time      100,000 spheres in the armadillo,
 #       before and now, Warp (cuda:0), numba-cuda and numba on the host's cores (bench/round_time.py)
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh profile   the per-round profile, before and now
