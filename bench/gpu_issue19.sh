@@ -8,12 +8,7 @@
 #   source .gpu2/setup.sh && bash bench/gpu_issue19.sh tests     the GPU backends' tests, the
 #       compile-nothing test included
 set -uo pipefail
-OUT=${OUT:-/tmp/out}
-mkdir -p "$OUT"
-export PYTHONUNBUFFERED=1
-nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader | tee "$OUT/gpu.txt"
-echo "cores: $(nproc)" | tee -a "$OUT/gpu.txt"
-python3 -c "import numba, numba_cuda, warp, numpy; print('numba', numba.__version__, 'numba-cuda', numba_cuda.__version__, 'warp', warp.__version__, 'numpy', numpy.__version__)" 2>&1 | grep -v "^Warp" | tee -a "$OUT/gpu.txt"
+source bench/gpu_header.sh
 # The start-up part keeps its caches here (the numba-cuda one: the folder 1); the later parts
 # load from it instead of compiling again.
 CACHE=/tmp/ndpack-gpu-cache

@@ -11,12 +11,7 @@
 #       (bench/profile_kernels.py), on both GPU backends
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh tests     the GPU backends' tests
 set -uo pipefail
-OUT=${OUT:-/tmp/out}
-mkdir -p "$OUT"
-export PYTHONUNBUFFERED=1
-nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader | tee "$OUT/gpu.txt"
-echo "cores: $(nproc)" | tee -a "$OUT/gpu.txt"
-python3 -c "import numba, numba_cuda, warp, numpy; print('numba', numba.__version__, 'numba-cuda', numba_cuda.__version__, 'warp', warp.__version__, 'numpy', numpy.__version__)" 2>&1 | grep -v "^Warp" | tee -a "$OUT/gpu.txt"
+source bench/gpu_header.sh
 [ -f /tmp/armadillo.obj ] || xz -dc .gpu4/armadillo.obj.xz > /tmp/armadillo.obj
 # Both versions compile the same kernel text, so they share one cache, kept between the parts.
 export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp

@@ -156,17 +156,12 @@ class RunState:
             )
         index = np.stack(np.unravel_index(np.arange(total), tuple(counts)), axis=1)
         cell_lower = lower + index * cell_size
-        centres = cell_lower + cell_size / 2
-        half_diagonal = 0.5 * float(np.linalg.norm(cell_size))
-        centre_distance = self._distance(centres)
-        # The distance is 1-Lipschitz: a cell whose centre is farther out than half its
-        # diagonal holds no interior point.
-        keep = centre_distance < half_diagonal
-        cells = {"lower": cell_lower[keep], "upper": cell_lower[keep] + cell_size}
-        # Upper bound of any clearance inside the cell, used to find the spheres near it.
-        cells["reach"] = -centre_distance[keep] + half_diagonal
-        # Lower bound of the boundary's distance at the centre, less a slack for rounding.
-        cells["wall"] = -centre_distance[keep] - WALL_SLACK * self.margin
+        centres, reach, wall = self.cell_bounds(cell_lower, cell_lower + cell_size)
+        # A cell whose centre is farther out than half its diagonal (no positive clearance
+        # bound) holds no interior point.
+        keep = reach > 0
+        cells = {"lower": cell_lower[keep], "upper": cell_lower[keep] + cell_size, "reach": reach[keep],
+                 "wall": wall[keep]}
         starts = self._candidate_starts(centres[keep][None], cells=cells)
         no_spheres = np.zeros((len(cells["lower"]), 0), dtype=np.int64)
         points, clearance = best_starts(self.backend, self.shape, starts, *self.spheres, no_spheres)
@@ -189,8 +184,9 @@ class RunState:
 
     def cell_bounds(self, lower, upper):
         """For cells ``lower``, ``upper`` (k, d): their centres (k, d), an upper bound of any
-        clearance inside each (k,) and a lower bound of the boundary's distance at each centre,
-        less a slack for rounding (k,); the distance is 1-Lipschitz."""
+        clearance inside each (the reach, which finds the spheres near the cell) (k,), and a lower
+        bound of the boundary's distance at each centre, less a slack for rounding (the wall)
+        (k,); both from the centre's distance, which is 1-Lipschitz."""
         centres = 0.5 * (lower + upper)
         centre_distance = self._distance(centres)
         half_diagonal = 0.5 * np.linalg.norm(upper - lower, axis=1)
@@ -404,15 +400,14 @@ def pack(
         stop_reason = "interrupted"
     finally:
         bar.close()
-    times, totals, fills = (np.array(column) for column in zip(*stats)) if stats else ([], [], [])
+    table = np.array(stats, dtype=np.float64).reshape(-1, 3)  # seconds, count, fill
     packing = Packing(
         centers=state.centers[: state.count].copy(),
         radii=state.radii[: state.count].copy(),
         rounds=state.rounds[: state.count].copy(),
         volume=volume.value,
         volume_error=volume.error,
-        stats=RoundStats(np.asarray(times, dtype=np.float64), np.asarray(totals, dtype=np.int64),
-                         np.asarray(fills, dtype=np.float64)),
+        stats=RoundStats(table[:, 0], table[:, 1].astype(np.int64), table[:, 2]),
         medial_axis=medial_axis,
         medial_radii=medial_radii,
         params=params,
@@ -469,8 +464,8 @@ def _run_rounds(state, strategy, n, min_radius, fill, time_budget, volume, start
             return "min_radius" if min_radius > 0 else "no_room"
         state.insert(centers, radii, len(stats))
         covered += float(ball_volume(state.dim, radii).sum())
-        state.settle(centers, radii)
         if state.count < n:  # nothing to prepare for a round that will not come
+            state.settle(centers, radii)
             strategy.after_round(state, n - state.count)
         stats.append((time.perf_counter() - started, state.count, covered / volume))
         bar.update(len(radii))

@@ -54,12 +54,11 @@ SPLITS_PER_SPHERE = 8
 SPLIT_CHUNK = 16_384
 
 
-def _large_enough(state, centers, clearance, min_radius):
-    """Candidates as spheres: radii are clearances less the safety margin; those below
-    ``min_radius`` (or the margin) dropped. ((k, d), (k,))."""
+def _usable(state, clearance, min_radius):
+    """Candidates as spheres: radii (k,), their clearances less the safety margin, and the
+    positions (j,) of those not below ``min_radius`` (or the margin)."""
     radii = clearance - state.margin
-    keep = radii >= max(min_radius, state.margin)
-    return centers[keep], radii[keep]
+    return radii, np.flatnonzero(radii >= max(min_radius, state.margin))
 
 
 class Faithful:
@@ -87,7 +86,8 @@ class Faithful:
 
     def choose(self, state, min_radius, room):
         _, clearance, centers = self.leaders(state, min(self.batch, room))
-        centers, radii = _large_enough(state, centers, clearance, min_radius)
+        radii, usable = _usable(state, clearance, min_radius)
+        centers, radii = centers[usable], radii[usable]
         chosen = []
         for i in range(len(radii)):
             # Same-round candidates know nothing of each other: keep those clear of the ones kept.
@@ -144,8 +144,7 @@ class Fast:
             ids, clearance, points, polished = store.candidates(low=(1 - window) * frontier)
             order = top_order(ids, clearance, min(MAX_CANDIDATES, len(ids)))
             ids, clearance, points, polished = ids[order], clearance[order], points[order], polished[order]
-            radii = clearance - state.margin
-            usable = np.flatnonzero(radii >= max(min_radius, state.margin))
+            radii, usable = _usable(state, clearance, min_radius)
             chosen = usable[disjoint_greedy(points[usable], radii[usable], state.margin)[:room]]
             waiting = ids[chosen[~polished[chosen]]]
             if len(waiting) == 0:

@@ -85,27 +85,22 @@ def _pack_new_shapes(folder, backend, device="-", **env):
     return json.loads(result.stdout.strip().splitlines()[-1])
 
 
-def _runs(name: str, device: str) -> bool:
+def _backend(name: str, device: str):
+    """The backend ``name`` on ``device``, or None where it cannot run here."""
     from ndpack import backends
 
     try:
-        backends.get_backend(name, device=device)
-    except Exception:  # noqa: BLE001 - not installed, or no compiler for this device
-        return False
-    return True
+        return backends.get_backend(name, device=device)
+    except Exception:  # noqa: BLE001 - not installed, no driver or device, no compiler for it
+        return None
 
 
 def _gpu(name: str) -> bool:
     """Whether ``name`` runs on a real GPU here (the GPU machine; never in CI)."""
-    from ndpack import backends
-
     if os.environ.get("NUMBA_ENABLE_CUDASIM") == "1":
         return False
-    try:
-        backend = backends.get_backend(name, device="cuda:0")
-    except Exception:  # noqa: BLE001 - no driver, no device, not installed
-        return False
-    return name != "warp" or backend.device.is_cuda
+    backend = _backend(name, "cuda:0")
+    return backend is not None and (name != "warp" or backend.device.is_cuda)
 
 
 @pytest.mark.parametrize("backend, device, env", [
@@ -120,7 +115,7 @@ def test_new_sizes_trees_meshes_and_plugin_tapes_compile_nothing(tmp_path, backe
         pytest.importorskip("warp")
     if device == "cuda:0" and not _gpu(backend):
         pytest.skip("no CUDA GPU here")
-    if device == "cpu" and not _runs(backend, device):
+    if device == "cpu" and _backend(backend, device) is None:
         pytest.skip("Warp's CPU compiler is not installed here (the GPU machine's copy)")
     counts = _pack_new_shapes(tmp_path, backend, device, **env)
     # The first uses made modules (loaded from disk or compiled, as this machine's cache has it);
