@@ -4,7 +4,8 @@
 # (before/: ndpack and bench/profile_kernels.py of commit b7017d9), made here with
 #   mkdir -p .gpu4/before && git archive b7017d9 ndpack bench/profile_kernels.py | tar -x -C .gpu4/before
 #   xz -9 -c ../shared/data/meshes/armadillo.obj > .gpu4/armadillo.obj.xz && echo /.gpu4/ >> .git/info/exclude
-# and carried with .gpu2 (carry: [".gpu2", ".gpu4"]).
+# and carried with .gpu2 (carry: [".gpu2", ".gpu4"]). BEFORE=path compares with another version
+# (the second session measured against .gpu4/before583, made alike from commit 583b665).
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh time      100,000 spheres in the armadillo,
 #       before and now, Warp (cuda:0), numba-cuda and numba on the host's cores (bench/round_time.py)
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh profile   the per-round profile, before and now
@@ -15,7 +16,7 @@ source bench/gpu_header.sh
 [ -f /tmp/armadillo.obj ] || xz -dc .gpu4/armadillo.obj.xz > /tmp/armadillo.obj
 # Both versions compile the same kernel text, so they share one cache, kept between the parts.
 export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
-BEFORE=$PWD/.gpu4/before
+BEFORE=${BEFORE:-$PWD/.gpu4/before}
 case "${1:-time}" in
   time)
     timeout 570 python3 bench/round_time.py --mesh /tmp/armadillo.obj --count 100000 --backends warp numba-cuda numba \

@@ -32,7 +32,7 @@ PHASES = [
     (protosphere.RunState, "_distance"),
     (protosphere.RunState, "insert"),
     (protosphere.RunState, "revive"),
-    (protosphere, "nearest_sphere"),
+    (protosphere.RunState, "settle"),
     (rounds, "disjoint_greedy"),
 ]
 

@@ -30,7 +30,6 @@ from tqdm.auto import tqdm
 
 from .backends import get_backend
 from .backends.prototypes import best_starts
-from .conflicts import nearest_sphere
 from .errors import InvalidPackingError, ParameterError, RepairWarning, ShapeError
 from .oracle import Oracle, ball_volume, check_compatible, check_packable
 from .packing import Packing, RoundStats
@@ -54,6 +53,9 @@ POLISH_ITERATIONS, POLISH_EPS_START, POLISH_EPS_END, POLISH_POWER = 100, 0.05, 1
 PUSH_OUT = 1.001
 #: Random starts per cell when dead prototypes are revived, before the driver gives up for room.
 REVIVE_TRIES, REVIVE_CHUNK = 32, 2048
+#: Prototypes restart in chunks whose start points hold at most this many floats (64 MB): few
+#: launches on a GPU, bounded memory for any grid.
+START_FLOATS = 1 << 23
 #: Radii are shrunk by this fraction of the shape's scale, so that float64 rounding in the
 #: distances (about 1e-16 of the scale) can never make touching spheres overlap or poke out.
 SAFETY_MARGIN = 1e-10
@@ -120,12 +122,32 @@ def _check_parameters(n, min_radius, fill, time_budget, iterations, batch, resta
         raise ParameterError(f"time_budget must be a positive number of seconds, got {time_budget!r}")
 
 
+@dataclass(frozen=True)
+class Touched:
+    """Prototypes a round's new spheres touched, before they converge again.
+
+    Attributes
+    ----------
+    ids : (t,) int64
+    pushed : (t, d) float64
+        Each one's restart point: its point pushed just outside the nearest new sphere.
+    gap : (t,) float64
+        The gap from its current point to the nearest new sphere: the clearance there now is the
+        smaller of this and the stored one.
+    """
+
+    ids: np.ndarray
+    pushed: np.ndarray
+    gap: np.ndarray
+
+
 class RunState:
     """The state of one packing run: prototypes, their cells, and the spheres so far.
 
     What both round strategies (:mod:`ndpack.rounds`) work on: the prototype store
     (``prototypes``), the spheres (:attr:`spheres`), and the moves the algorithm makes
-    (:meth:`reconverge`, :meth:`polish`, :meth:`settle`, :meth:`revive`, :meth:`insert`).
+    (:meth:`reconverge`, :meth:`polish`, :meth:`touched`, :meth:`settle`, :meth:`revive`,
+    :meth:`insert`).
     """
 
     def __init__(self, shape, backend, counts, iterations, restarts, rng):
@@ -221,43 +243,53 @@ class RunState:
         """The inserted spheres: centres (m, d) and radii (m,)."""
         return self.centers[: self.count], self.radii[: self.count]
 
-    def reconverge(self, ids, points=None, new_centers=None, new_radii=None, tries=None):
-        """Restart the prototypes ``ids`` at their best start and let them converge again.
+    def reconverge(self, ids, first=None, tries=None, chunk=None):
+        """Restart the prototypes ``ids`` (k,) at their best start and let them converge again.
 
-        The starts are the current point, that point (``points`` (k, d)) pushed radially just
-        outside the new sphere it fell into (the new gaps lie along that sphere), and random
-        points of the cell.
+        The starts are the current point, ``first`` (k, d) if given (clipped to the cells), and
+        ``tries`` random points of each cell (default ``restarts``). Long lists go in chunks
+        (of ``chunk``, by default as many as ``START_FLOATS`` allows), bounding their starts' memory.
         """
-        first = np.empty((0, len(ids), self.dim))
-        if new_centers is not None:
-            nearest = nearest_sphere(points, new_centers, new_radii)
-            offsets = points - new_centers[nearest]
-            lengths = np.linalg.norm(offsets, axis=1)
-            direction = offsets / np.maximum(lengths, 1e-300)[:, None]
-            pushed = new_centers[nearest] + direction * (PUSH_OUT * new_radii[nearest])[:, None]
-            first = np.clip(pushed, self.cell_lower[ids], self.cell_upper[ids])[None]
-        starts = self._candidate_starts(first, ids, tries)
-        self.prototypes.move(ids, *self.spheres, self.steps, starts=starts if len(starts) else None)
+        tries = self.restarts if tries is None else tries
+        chunk = chunk or max(1024, START_FLOATS // ((tries + 2) * self.dim))
+        for start in range(0, len(ids), chunk):
+            part = slice(start, start + chunk)
+            lead = np.empty((0, len(ids[part]), self.dim))
+            if first is not None:
+                lead = np.clip(first[part], self.cell_lower[ids[part]], self.cell_upper[ids[part]])[None]
+            starts = self._candidate_starts(lead, ids[part], tries)
+            self.prototypes.move(ids[part], *self.spheres, self.steps, starts=starts if len(starts) else None)
 
     def polish(self, ids):
         """Move prototypes ``ids`` further with the finer polish schedule, keeping each one's
         new place only where its clearance grew."""
         self.prototypes.move(ids, *self.spheres, self.polish_steps, polish=True)
 
+    def touched(self, new_centers, new_radii):
+        """The prototypes whose clearance ball the new spheres (k, d), (k,) meet: a
+        :class:`Touched`, with each one's restart point just outside the nearest new sphere."""
+        ids, points, nearest = self.prototypes.touched(new_centers, new_radii)
+        centers, radii = new_centers[nearest], new_radii[nearest]
+        offsets = points - centers
+        lengths = np.linalg.norm(offsets, axis=1)
+        # The point pushed radially just outside the sphere it fell into: the new gaps lie along it.
+        direction = offsets / np.maximum(lengths, 1e-300)[:, None]
+        pushed = centers + direction * (PUSH_OUT * radii)[:, None]
+        return Touched(ids, pushed, lengths - radii)
+
     def settle(self, new_centers, new_radii):
         """After new spheres (k, d), (k,): the prototypes whose clearance ball they meet
         converge again (the others keep their nearest obstacle, so nothing changes for them)."""
-        touched, points = self.prototypes.touched(new_centers, new_radii)
-        if len(touched):
-            self.reconverge(touched, points, new_centers, new_radii)
+        touched = self.touched(new_centers, new_radii)
+        if len(touched.ids):
+            self.reconverge(touched.ids, touched.pushed)
 
     def revive(self):
         """Restart the dead prototypes (no free start found) with fresh random points; how many live."""
         dead, _ = self.prototypes.select(high=self.margin)
         if len(dead) == 0 or self.count == 0:
             return 0
-        for start in range(0, len(dead), REVIVE_CHUNK):  # bounded memory for any grid
-            self.reconverge(dead[start : start + REVIVE_CHUNK], tries=REVIVE_TRIES)
+        self.reconverge(dead, tries=REVIVE_TRIES, chunk=REVIVE_CHUNK)
         return int(np.count_nonzero(self.prototypes.gather(dead)[1] > self.margin))
 
     def insert(self, centers, radii, round_index):
@@ -465,8 +497,7 @@ def _run_rounds(state, strategy, n, min_radius, fill, time_budget, volume, start
         state.insert(centers, radii, len(stats))
         covered += float(ball_volume(state.dim, radii).sum())
         if state.count < n:  # nothing to prepare for a round that will not come
-            state.settle(centers, radii)
-            strategy.after_round(state, n - state.count)
+            strategy.after_round(state, centers, radii, n - state.count)
         stats.append((time.perf_counter() - started, state.count, covered / volume))
         bar.update(len(radii))
         bar.set_postfix(fill=f"{covered / volume:.4f}", refresh=False)

@@ -1,16 +1,17 @@
 """How a round chooses its spheres: the two strategies of the ProtoSphere driver.
 
 The driver (:func:`ndpack.protosphere.pack`) runs the same loop in both modes: choose spheres,
-insert them, let the prototypes they touched converge again, then whatever the strategy does
-after a round. A strategy is an object with two methods over the run's state
-(:class:`ndpack.protosphere.RunState`):
+insert them, then let the strategy prepare the next round. A strategy is an object with two
+methods over the run's state (:class:`ndpack.protosphere.RunState`):
 
 ``choose(state, min_radius, room) -> (centers (k, d), radii (k,))``
     The spheres of this round, largest first, mutually disjoint, at most ``room``, none below
     ``min_radius``; none when no prototype has room.
-``after_round(state, room)``
-    Work between rounds (the fast mode splits cells here), knowing that at most ``room`` more
-    spheres are wanted; not called after the last round.
+``after_round(state, centers, radii, room)``
+    After the round's spheres ``centers`` (k, d), ``radii`` (k,) are inserted: the prototypes
+    they touched converge again, and whatever else the strategy does between rounds (the fast
+    mode splits cells, and restarts the touched and the new prototypes together), knowing
+    that at most ``room`` more spheres are wanted; not called after the last round.
 
 :class:`Faithful` is the paper's round on a fixed grid; :class:`Fast` takes a window of
 candidates a round and refines the grid where gaps have become small. Only the fast mode keeps
@@ -50,8 +51,6 @@ MAX_PROTOTYPES = 16_000_000
 #: Fast mode: at most this many cells split after a round per sphere still wanted (``n`` less
 #: those placed), so that the last rounds, which want few spheres, split few cells.
 SPLITS_PER_SPHERE = 8
-#: New prototypes of split cells converge in chunks of this many (bounded memory for their starts).
-SPLIT_CHUNK = 16_384
 
 
 def _usable(state, clearance, min_radius):
@@ -95,8 +94,8 @@ class Faithful:
                 chosen.append(i)
         return centers[chosen], radii[chosen]
 
-    def after_round(self, state, room):
-        pass
+    def after_round(self, state, centers, radii, room):
+        state.settle(centers, radii)
 
 
 class Fast:
@@ -159,13 +158,18 @@ class Fast:
         self.frontier = frontier
         return points[chosen], radii[chosen]
 
-    def after_round(self, state, room):
-        self.refine(state, SPLITS_PER_SPHERE * room)
+    def after_round(self, state, centers, radii, room):
+        self.refine(state, SPLITS_PER_SPHERE * room, state.touched(centers, radii))
 
-    def refine(self, state, most=None):
+    def refine(self, state, most=None, touched=None):
         """Split in two, across their longest side, the cells longer than ``ratio`` times the
         round's frontier whose clearance bound reaches the candidates' window; the new halves'
         prototypes converge. Repeats on the halves; returns how many split.
+
+        The prototypes the round's spheres ``touched`` (a :class:`~ndpack.protosphere.Touched`)
+        restart with the first level's new prototypes, in the same launches (on a GPU a launch
+        costs its longest prototype's convergence, however few converge); a touched prototype
+        whose cell splits restarts in its half.
 
         Work per round follows the cells that may split, not all cells. The bound stays valid as
         spheres arrive (clearances only shrink), so a cell is looked at again only once the
@@ -181,6 +185,10 @@ class Fast:
             if len(ids) == 0:
                 break
             points, clearance = store.gather(ids)
+            if touched is not None:  # not moved yet: the clearance at their point, with the new spheres
+                rows = np.searchsorted(touched.ids, ids).clip(max=len(touched.ids) - 1)
+                hit = touched.ids[rows] == ids if len(touched.ids) else np.zeros(len(ids), dtype=bool)
+                clearance[hit] = np.minimum(clearance[hit], touched.gap[rows[hit]])
             lower, upper = store.cell_lower[ids], store.cell_upper[ids]
             # Clearance is 1-Lipschitz: nowhere in the cell above the prototype's plus the way
             # to the farthest corner (tighter than the stored reach for cells not moved lately).
@@ -196,18 +204,26 @@ class Fast:
             ids = ids[keep]
             if len(ids) == 0:
                 break
-            new = self._split(state, ids, points[keep], (upper - lower)[keep])
+            new, centres = self._split(state, ids, points[keep], (upper - lower)[keep])
+            if touched is not None:
+                state.reconverge(np.concatenate([touched.ids, new]), np.concatenate([touched.pushed, centres]))
+                touched = None
+            else:
+                state.reconverge(new)
             changed = np.concatenate([ids, new])
             self.longest = np.concatenate([self.longest, np.empty(len(new))])
             self.bound = np.concatenate([self.bound, np.empty(len(new))])
             self.longest[changed] = (store.cell_upper[changed] - store.cell_lower[changed]).max(axis=1)
             self.bound[changed] = store.reach[changed]
             total += len(ids)
+        if touched is not None and len(touched.ids):
+            state.reconverge(touched.ids, touched.pushed)
         return total
 
     def _split(self, state, ids, points, sides):
         """Split cells ``ids`` in two across their longest side; the half that holds the prototype
-        (``points``) keeps it, still a local maximum there, and the other half gets a new one."""
+        (``points``) keeps it, still a local maximum there, and the other half gets a new one, at
+        its centre, not converged yet. Returns the new prototypes' ids (j,) and centres (j, d)."""
         store = state.prototypes
         rows, axis = np.arange(len(ids)), np.argmax(sides, axis=1)
         lower, upper = store.cell_lower[ids], store.cell_upper[ids]
@@ -221,7 +237,5 @@ class Fast:
         new_lower, new_upper = np.concatenate([kept_lower, other_lower]), np.concatenate([kept_upper, other_upper])
         centres, reach, wall = state.cell_bounds(new_lower, new_upper)
         reach = np.minimum(np.tile(store.reach[ids], 2), reach)
-        new = store.split(ids, new_lower, new_upper, reach, wall, centres[len(ids):], np.full(len(ids), -np.inf))
-        for start in range(0, len(new), SPLIT_CHUNK):
-            state.reconverge(new[start : start + SPLIT_CHUNK])
-        return new
+        centres = centres[len(ids):]
+        return store.split(ids, new_lower, new_upper, reach, wall, centres, np.full(len(ids), -np.inf)), centres

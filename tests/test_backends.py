@@ -220,8 +220,8 @@ def _store_inputs():
 def _exercise(store, centers, radii, rng):
     """The driver's calls on a store, in round order; every answer, for comparison."""
     answers = {"leaders1": store.leaders(1, 0.05), "leaders7": store.leaders(7, 0.3)}
-    touched, points = store.touched(centers[:2], radii[:2])
-    answers["touched"] = touched, points
+    touched, points, nearest = store.touched(centers[:2], radii[:2])
+    answers["touched"] = touched, points, nearest
     answers["gather"] = store.gather(touched)
     starts = rng.uniform(store.cell_lower[touched], store.cell_upper[touched], (3, len(touched), 2))
     store.move(touched, centers[:2], radii[:2], cooling_schedule(30), starts=starts)

@@ -6,7 +6,7 @@ import pytest
 import ndpack as nd
 from ndpack.backends.numba_backend import INDEX_NEW_SPHERES, NumbaBackend
 from ndpack.backends.numpy_backend import NumpyBackend
-from ndpack.conflicts import disjoint_greedy, nearest_sphere
+from ndpack.conflicts import disjoint_greedy, greedy_over_pairs
 
 REFERENCE = NumpyBackend()
 
@@ -45,7 +45,12 @@ def test_touched_through_the_index_matches_the_reference(dim):
     new_centers = rng.random((4 * INDEX_NEW_SPHERES, dim))
     new_radii = rng.random(4 * INDEX_NEW_SPHERES) * 0.05
     expected = REFERENCE.touched(points, clearance, new_centers, new_radii)
-    assert 0 < expected.sum() < len(points)
+    assert 0 < (expected >= 0).sum() < len(points)
+    # Which ones are touched, and the nearest new sphere of each (a brute-force argmin).
+    gaps = np.linalg.norm(points[:, None] - new_centers, axis=2) - new_radii
+    nearest = np.argmin(gaps, axis=1)
+    touched = gaps[np.arange(len(points)), nearest] < clearance
+    np.testing.assert_array_equal(expected, np.where(touched, nearest, -1))
     np.testing.assert_array_equal(NumbaBackend().touched(points, clearance, new_centers, new_radii), expected)
 
 
@@ -76,7 +81,7 @@ def test_walls_spare_evaluations_without_changing_results(shape):
 
 
 @pytest.mark.parametrize("large", [0, 40], ids=["even radii", "a few large"])
-def test_greedy_conflict_check_and_nearest_sphere_match_brute_force(large):
+def test_greedy_conflict_check_matches_brute_force(large):
     rng = np.random.default_rng(5)
     centers = rng.random((600, 3))
     # A fast-mode round may hold a few spheres far larger than the rest (gaps found late).
@@ -87,9 +92,26 @@ def test_greedy_conflict_check_and_nearest_sphere_match_brute_force(large):
         if all(np.linalg.norm(centers[i] - centers[j]) >= radii[i] + radii[j] + 1e-9 for j in brute):
             brute.append(i)
     np.testing.assert_array_equal(kept, brute)
-    points = rng.random((300, 3))
-    gaps = np.linalg.norm(points[:, None] - centers, axis=2) - radii
-    np.testing.assert_array_equal(nearest_sphere(points, centers, radii), np.argmin(gaps, axis=1))
+
+
+def test_parallel_greedy_decides_as_one_item_after_another():
+    """Long chains of rivals (each blocks the next) and random conflict graphs: the passes keep
+    exactly what the sequential rule keeps."""
+    def sequential(count, first, second):
+        kept, blocked = [], np.zeros(count, dtype=bool)
+        for i in range(count):
+            if not blocked[i]:
+                kept.append(i)
+                blocked[second[first == i]] = True
+        return kept
+
+    chain = np.arange(199)
+    np.testing.assert_array_equal(greedy_over_pairs(200, chain, chain + 1), np.arange(0, 200, 2))
+    rng = np.random.default_rng(3)
+    for count, pairs in ((50, 0), (300, 900), (300, 5000)):
+        a, b = rng.integers(0, count, (2, pairs))
+        first, second = np.minimum(a, b)[a != b], np.maximum(a, b)[a != b]
+        np.testing.assert_array_equal(greedy_over_pairs(count, first, second), sequential(count, first, second))
 
 
 def fill_at(packing, count):
@@ -214,10 +236,14 @@ def test_device_index_finds_what_the_reference_finds(name, precision):
         else:  # rounding may add a sphere at the edge of the reach; every expected one is there
             assert all(set(want) <= set(row) for want, row in zip(expected, got))
     new_centers, new_radii = centers[:300], radii[:300] * 3
-    expected = np.flatnonzero(REFERENCE.touched(points, clearance, new_centers, new_radii))
+    nearest = REFERENCE.touched(points, clearance, new_centers, new_radii)
+    expected = np.flatnonzero(nearest >= 0)
     assert 0 < len(expected) < cells
-    touched = store.touched(new_centers, new_radii)[0]
+    touched, _, found = store.touched(new_centers, new_radii)
     if precision == "float64":
         np.testing.assert_array_equal(touched, expected)
+        np.testing.assert_array_equal(found, nearest[expected])
     else:  # float32 decides ties at the last bit differently: a handful may differ
         assert len(np.setxor1d(touched, expected)) <= 0.01 * cells
+        both = np.intersect1d(touched, expected)
+        assert np.mean(found[np.searchsorted(touched, both)] == nearest[both]) >= 0.99

@@ -127,7 +127,13 @@ class Backend:
         raise NotImplementedError
 
     def touched(self, points, clearance, new_centers, new_radii) -> np.ndarray:
-        """(n,) bool: prototypes whose clearance ball meets one of the new spheres (k, d), (k,)."""
+        """Which prototypes the new spheres (k, d), (k,) touch, and the nearest that does.
+
+        Returns (n,) int64: per prototype (``points`` (n, d), ``clearance`` (n,)), the new sphere
+        of smallest gap ``|p - c| - r`` (the first of equals) where that gap is below its
+        clearance (its clearance ball meets the sphere), else -1. The driver restarts a touched
+        prototype just outside that sphere.
+        """
         raise NotImplementedError
 
     def prototypes(self, shape, cell_lower, cell_upper, reach, points, clearance, wall=None):

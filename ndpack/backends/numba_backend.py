@@ -50,11 +50,12 @@ def index_insert_range(start, stop, centers, radii, origin, top, heads, nxt, lev
 def index_query(lower, upper, bound, counting, centers, radii, origin, top, heads, nxt, level_of, level_head,
                 level_next, level_count, level_rmax, counts, out):
     for b in prange(lower.shape[0]):
-        # counting 0: tighten bound[b]; 1: count the spheres within it, the first of them in out[b]
-        # (one kernel for both: each parallel entry costs seconds to compile on first use).
+        # counting 0: tighten bound[b] (and put the sphere that did in out[b, 0], if out has a
+        # column); 1: count the spheres within it, the first of them in out[b] (one kernel for
+        # all: each parallel entry costs seconds to compile on first use).
         if counting == 0:
             bound[b] = index_near(b, lower, upper, bound[b], 0, centers, radii, origin, top, heads, nxt, level_of,
-                                  level_head, level_next, level_count, level_rmax, out, b, 0)[0]
+                                  level_head, level_next, level_count, level_rmax, out, b, out.shape[1])[0]
         else:
             counts[b] = index_near(b, lower, upper, bound[b], 1, centers, radii, origin, top, heads, nxt, level_of,
                                    level_head, level_next, level_count, level_rmax, out, b, out.shape[1])[1]
@@ -168,7 +169,7 @@ class NumbaBackend(Backend):
         namespace = geometry_kernels(points.shape[1])
         points, clearance = _f64(points), _f64(clearance)
         if len(new_radii) <= INDEX_NEW_SPHERES:
-            out = np.empty(len(points), dtype=np.bool_)
+            out = np.empty(len(points), dtype=np.int64)
             self._run(namespace["touched_all"], points, clearance, _f64(new_centers), _f64(new_radii), out)
             return out
         # Many new spheres (a large batch): index them, so each prototype looks only nearby.
@@ -177,9 +178,10 @@ class NumbaBackend(Backend):
         new_centers, new_radii = _f64(new_centers), _f64(new_radii)
         index = SphereIndex(namespace["index_insert_range"]).sync(new_centers, new_radii)
         bound = clearance.copy()
+        nearest = np.empty((len(points), 1), dtype=np.int64)
         self._run(namespace["index_query"], points, points, bound, 0, new_centers, new_radii, *index,
-                  np.empty(0, dtype=np.int64), np.empty((len(points), 0), dtype=np.int64))
-        return bound < clearance
+                  np.empty(0, dtype=np.int64), nearest)
+        return nearest[:, 0]
 
 
 _namespaces = {}  # id(program) -> (program, namespace)

@@ -65,6 +65,7 @@ def append(i, points, clearance, polished, counter, out_ids, out_values, out_poi
     for k in range(D):
         out_points[slot, k] = points[i, k]
     out_flags[slot] = polished[i]
+    return slot
 
 
 def max_all(clearance, below, out):
@@ -86,16 +87,18 @@ def select_all(clearance, polished, points, low, high, unpolished, top, relative
 
 
 def touched_index_select(points, clearance, polished, centers, radii, origin, top, heads, nxt, level_of,
-                         level_head, level_next, level_count, level_rmax, scratch, counter, out_ids, out_values,
+                         level_head, level_next, level_count, level_rmax, nearest, counter, out_ids, out_values,
                          out_points, out_flags):
     i = cuda.grid(1)
     if i < points.shape[0]:
         c = clearance[i]
         # Touched: a new sphere's gap from the point is below its clearance (the index of the
-        # new spheres tightens the bound below it).
+        # new spheres tightens the bound below it, and names the nearest new sphere, which goes
+        # back in the flags' place).
         if c > -math.inf and index_near(i, points, points, c, 0, centers, radii, origin, top, heads, nxt, level_of,
-                                        level_head, level_next, level_count, level_rmax, scratch, 0, 0)[0] < c:
-            append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
+                                        level_head, level_next, level_count, level_rmax, nearest, i, 1)[0] < c:
+            slot = append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
+            out_flags[slot] = nearest[i, 0]
 
 
 def gather_ids(ids, points, clearance, out_points, out_clearance):
@@ -298,7 +301,7 @@ class NumbaCudaBackend(Backend):
     def touched(self, points, clearance, new_centers, new_radii):
         namespace = self._geometry(points.shape[1])
         to = self.cuda.to_device
-        out = self.cuda.device_array(len(points), dtype=np.bool_)
+        out = self.cuda.device_array(len(points), dtype=np.int64)
         self._launch(namespace["touched_all"], len(points), to(_f64(points)), to(_f64(clearance)),
                      to(_f64(new_centers)), to(_f64(new_radii)), out)
         return out.copy_to_host()

@@ -249,15 +249,20 @@ def touched_one(i, points, clearance, centers, radii, out):
 
 
 def touches(i, points, clearance, centers, radii):
-    """Whether prototype ``i``'s clearance ball meets one of the spheres."""
+    """The sphere nearest to prototype ``i`` (smallest gap, the first of equals) if its clearance
+    ball meets it, else -1."""
+    nearest = -1
+    gap_min = clearance[i]
     for s in range(radii.shape[0]):
         length2 = 0.0
         for k in range(D):
             t = points[i, k] - centers[s, k]
             length2 += t * t
-        if math.sqrt(length2) - radii[s] < clearance[i]:
-            return True
-    return False
+        gap = math.sqrt(length2) - radii[s]
+        if gap < gap_min:
+            gap_min = gap
+            nearest = s
+    return nearest
 
 
 # ---------------------------------------------------------------------------- the sphere index
@@ -309,7 +314,9 @@ def index_near(b, lower, upper, bound, counting, centers, radii, origin, top, he
     """The spheres near box ``b`` (``lower[b]``, ``upper[b]``), found through the index.
 
     ``counting`` 0: returns ``bound`` tightened by every sphere within it of the box (the upper
-    bound of the clearance in the box: a sphere's gap from the box centre plus half a diagonal).
+    bound of the clearance in the box: a sphere's gap from the box centre plus half a diagonal);
+    with ``width`` > 0, ``out[row, 0]`` is the sphere that tightened it most (the first of equals),
+    -1 if none did.
     ``counting`` 1: counts the spheres that come within ``bound`` of the box, and writes the
     first ``width`` of them into ``out[row]``. Both visit the cells of each level within ``bound``
     (plus the level's largest radius) of the box, or the level's list where that is shorter.
@@ -325,6 +332,7 @@ def index_near(b, lower, upper, bound, counting, centers, radii, origin, top, he
     high = point()
     cell = point()
     mask = heads.shape[0] - 1
+    nearest = -1
     for level in range(level_head.shape[0]):
         if level_count[level] == 0:
             continue
@@ -369,10 +377,15 @@ def index_near(b, lower, upper, bound, counting, centers, radii, origin, top, he
                         break
             if mine:
                 if counting == 0:
-                    bound = min(bound, centre_gap(b, s, lower, upper, centers, radii) + half)
+                    gap = centre_gap(b, s, lower, upper, centers, radii) + half
+                    if gap < bound or (gap == bound and 0 <= s < nearest):
+                        bound = gap
+                        nearest = s
                 elif box_gap(b, s, lower, upper, centers, radii) <= bound:
                     if found < width:
                         out[row, found] = s
                     found += 1
             s = level_next[s] if listed else nxt[s]
+    if counting == 0 and width > 0:
+        out[row, 0] = nearest
     return bound, found

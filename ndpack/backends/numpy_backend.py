@@ -119,9 +119,13 @@ class NumpyBackend(Backend):
         return (neighbours, np.concatenate(bounds)) if return_bound else neighbours
 
     def touched(self, points, clearance, new_centers, new_radii):
-        result = np.zeros(len(points), dtype=bool)
+        nearest = np.full(len(points), -1, dtype=np.int64)
+        gap_min = np.array(clearance, dtype=np.float64)
         for part in _chunks(len(new_centers), len(points) * points.shape[1]):
             offsets = points[:, None, :] - new_centers[part]
             gaps = np.sqrt(np.einsum("nkd,nkd->nk", offsets, offsets)) - new_radii[part]
-            result |= (gaps < clearance[:, None]).any(axis=1)
-        return result
+            best = np.argmin(gaps, axis=1)  # the first of equals, and chunks come in order
+            gap = gaps[np.arange(len(points)), best]
+            closer = gap < gap_min
+            nearest[closer], gap_min[closer] = part.start + best[closer], gap[closer]
+        return nearest

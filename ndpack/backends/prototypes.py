@@ -113,7 +113,8 @@ class Prototypes:
     def touched(self, new_centers, new_radii):
         """The prototypes whose clearance ball meets one of the new spheres (k, d), (k,).
 
-        Returns ids (t,) int64 and their points (t, d) float64.
+        Returns ids (t,) int64, their points (t, d) float64 and the nearest new sphere of each
+        (t,) int64 (smallest gap, the first of equals; see :meth:`Backend.touched`).
         """
         raise NotImplementedError
 
@@ -201,8 +202,9 @@ class HostPrototypes(Prototypes):
         return new
 
     def touched(self, new_centers, new_radii):
-        ids = np.flatnonzero(self.backend.touched(self.points, self.clearance, new_centers, new_radii))
-        return ids, self.points[ids]
+        nearest = self.backend.touched(self.points, self.clearance, new_centers, new_radii)
+        ids = np.flatnonzero(nearest >= 0)
+        return ids, self.points[ids], nearest[ids]
 
     def move(self, ids, centers, radii, steps, starts=None, polish=False):
         backend, shape = self.backend, self.shape
@@ -266,6 +268,7 @@ class DevicePrototypes(Prototypes):
                         device.empty(count, "point"), device.empty(count, "index"))
         self.d_counter, self.d_top = device.empty(1, "index"), device.empty(1, "float")
         self.d_scratch = device.empty((1, 1), "index")  # the unused table of a bound-only index query
+        self.d_nearest = None  # (n, 1): the touched query's nearest new sphere per prototype
         self.sphere_index = DeviceIndex(self.dim, device)
         self.width = self.FIRST_WIDTH
         self.prefix = min(count, self.FIRST_PREFIX)
@@ -348,9 +351,13 @@ class DevicePrototypes(Prototypes):
     def touched(self, new_centers, new_radii):
         up = self.device.upload
         index = DeviceIndex(self.dim, self.device).sync(new_centers, new_radii)
-        ids, _, points, _, _ = self._compact("touched_index_select", self.d_points, self.d_clearance, self.d_polished,
-                                             up(new_centers, "point"), up(new_radii, "float"), *index, self.d_scratch)
-        return ids, points
+        if self.d_nearest is None or self.d_nearest.shape[0] < len(self):
+            self.d_nearest = self.device.empty((len(self), 1), "index")
+        # The kernel sends each one's nearest new sphere back in the polish flags' place.
+        ids, _, points, nearest, _ = self._compact(
+            "touched_index_select", self.d_points, self.d_clearance, self.d_polished, up(new_centers, "point"),
+            up(new_radii, "float"), *index, self.d_nearest)
+        return ids, points, nearest.astype(np.int64)
 
     def gather(self, ids):
         count = len(ids)

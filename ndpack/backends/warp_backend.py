@@ -209,14 +209,14 @@ class WarpBackend(Backend):
 
     def touched(self, points, clearance, new_centers, new_radii):
         if len(points) == 0:
-            return np.zeros(0, dtype=bool)
+            return np.zeros(0, dtype=np.int64)
         module = self._geometry(points.shape[1])
         out = self.wp.empty(len(points), dtype=self.wp.int32, device=self.device)
         self.wp.launch(module.touched_all, dim=len(points), device=self.device, inputs=[
             self._points(module, points), self._array(clearance, module.F),
             self._points(module, new_centers), self._array(new_radii, module.F), out,
         ])
-        return out.numpy().astype(bool)
+        return out.numpy().astype(np.int64)
 
 
 class _WarpDevice:

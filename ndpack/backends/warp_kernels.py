@@ -186,12 +186,16 @@ def near_all(lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD), reach: wp
 @wp.func
 def touches(i: int, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F), centers: wp.array(dtype=VecD),
             radii: wp.array(dtype=F)):
-    """Whether prototype ``i``'s clearance ball meets one of the spheres."""
-    hit = int(0)
+    """The sphere nearest to prototype ``i`` (smallest gap, the first of equals) if its clearance
+    ball meets it, else -1."""
+    nearest = int(-1)
+    gap_min = clearance[i]
     for s in range(radii.shape[0]):
-        if wp.length(points[i] - centers[s]) - radii[s] < clearance[i]:
-            hit = 1
-    return hit
+        gap = wp.length(points[i] - centers[s]) - radii[s]
+        if gap < gap_min:
+            gap_min = gap
+            nearest = s
+    return nearest
 
 
 @wp.kernel
@@ -279,8 +283,10 @@ def index_near(lo: VecD, hi: VecD, bound: F, counting: int, centers: wp.array(dt
                level_count: wp.array(dtype=wp.int32), level_rmax: wp.array(dtype=F),
                out: wp.array2d(dtype=wp.int32), row: int):
     """The spheres near the box ``lo``-``hi``: ``counting`` 0 tightens ``bound`` (a sphere's gap
-    from the box centre plus half a diagonal), 1 counts those within ``bound`` of the box and
-    writes the first ones into ``out[row]``. Returns ``(bound, count)``."""
+    from the box centre plus half a diagonal) and, where ``row >= 0``, puts the sphere that
+    tightened it most (the first of equals; -1 if none) in ``out[row, 0]``; 1 counts those
+    within ``bound`` of the box and writes the first ones into ``out[row]``. Returns ``(bound,
+    count)``."""
     middle = F(0.5) * (lo + hi)
     half = F(0.5) * wp.length(hi - lo)
     slack = F(INDEX_SLACK)
@@ -290,6 +296,7 @@ def index_near(lo: VecD, hi: VecD, bound: F, counting: int, centers: wp.array(dt
     high = VecD()
     cell = VecD()
     mask = heads.shape[0] - 1
+    nearest = int(-1)
     side = top
     for level in range(level_head.shape[0]):
         if level > 0:
@@ -330,7 +337,10 @@ def index_near(lo: VecD, hi: VecD, bound: F, counting: int, centers: wp.array(dt
                             mine = False
             if mine:
                 if counting == 0:
-                    bound = wp.min(bound, wp.length(middle - centers[s]) - radii[s] + half)
+                    gap = wp.length(middle - centers[s]) - radii[s] + half
+                    if gap < bound or (gap == bound and s < nearest):
+                        bound = gap
+                        nearest = s
                 else:
                     outside = VecD()
                     for k in range(D):
@@ -343,6 +353,8 @@ def index_near(lo: VecD, hi: VecD, bound: F, counting: int, centers: wp.array(dt
                 s = level_next[s]
             else:
                 s = nxt[s]
+    if counting == 0 and row >= 0:
+        out[row, 0] = nearest
     return bound, found
 
 
@@ -357,7 +369,7 @@ def index_bound_ids(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), 
     b = wp.tid()
     i = ids[b]
     c, n = index_near(lower[i], upper[i], reach[i], 0, centers, radii, origin, top, heads, nxt, level_of, level_head,
-                      level_next, level_count, level_rmax, scratch, 0)
+                      level_next, level_count, level_rmax, scratch, -1)
     bound[b] = c
 
 
@@ -383,17 +395,19 @@ def touched_index_select(points: wp.array(dtype=VecD), clearance: wp.array(dtype
                          nxt: wp.array(dtype=wp.int32), level_of: wp.array(dtype=wp.int32),
                          level_head: wp.array(dtype=wp.int32), level_next: wp.array(dtype=wp.int32),
                          level_count: wp.array(dtype=wp.int32), level_rmax: wp.array(dtype=F),
-                         scratch: wp.array2d(dtype=wp.int32), counter: wp.array(dtype=wp.int32),
+                         nearest: wp.array2d(dtype=wp.int32), counter: wp.array(dtype=wp.int32),
                          out_ids: wp.array(dtype=wp.int32), out_values: wp.array(dtype=F),
                          out_points: wp.array(dtype=VecD), out_flags: wp.array(dtype=wp.int32)):
-    """Append the prototypes whose clearance ball meets a new sphere (indexed in the arguments)."""
+    """Append the prototypes whose clearance ball meets a new sphere (indexed in the arguments),
+    with the nearest new sphere in the flags' place (``nearest`` (n, 1) is its scratch)."""
     i = wp.tid()
     c = clearance[i]
     if c > F(-1.0e30):
         tight, n = index_near(points[i], points[i], c, 0, centers, radii, origin, top, heads, nxt, level_of,
-                              level_head, level_next, level_count, level_rmax, scratch, 0)
+                              level_head, level_next, level_count, level_rmax, nearest, i)
         if tight < c:
-            append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
+            slot = append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
+            out_flags[slot] = nearest[i, 0]
 
 
 @wp.kernel
