@@ -32,7 +32,7 @@ PHASES = [
     (protosphere.RunState, "_distance"),
     (protosphere.RunState, "insert"),
     (protosphere.RunState, "revive"),
-    (protosphere.RunState, "settle"),
+    (protosphere.RunState, "touched"),
     (rounds, "disjoint_greedy"),
 ]
 

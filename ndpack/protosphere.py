@@ -281,8 +281,7 @@ class RunState:
         """After new spheres (k, d), (k,): the prototypes whose clearance ball they meet
         converge again (the others keep their nearest obstacle, so nothing changes for them)."""
         touched = self.touched(new_centers, new_radii)
-        if len(touched.ids):
-            self.reconverge(touched.ids, touched.pushed)
+        self.reconverge(touched.ids, touched.pushed)
 
     def revive(self):
         """Restart the dead prototypes (no free start found) with fresh random points; how many live."""

@@ -186,9 +186,9 @@ class Fast:
                 break
             points, clearance = store.gather(ids)
             if touched is not None:  # not moved yet: the clearance at their point, with the new spheres
-                rows = np.searchsorted(touched.ids, ids).clip(max=len(touched.ids) - 1)
-                hit = touched.ids[rows] == ids if len(touched.ids) else np.zeros(len(ids), dtype=bool)
-                clearance[hit] = np.minimum(clearance[hit], touched.gap[rows[hit]])
+                hit = np.isin(ids, touched.ids)
+                rows = np.searchsorted(touched.ids, ids[hit])
+                clearance[hit] = np.minimum(clearance[hit], touched.gap[rows])
             lower, upper = store.cell_lower[ids], store.cell_upper[ids]
             # Clearance is 1-Lipschitz: nowhere in the cell above the prototype's plus the way
             # to the farthest corner (tighter than the stored reach for cells not moved lately).
@@ -216,7 +216,7 @@ class Fast:
             self.longest[changed] = (store.cell_upper[changed] - store.cell_lower[changed]).max(axis=1)
             self.bound[changed] = store.reach[changed]
             total += len(ids)
-        if touched is not None and len(touched.ids):
+        if touched is not None:  # no cell split: the touched restart alone
             state.reconverge(touched.ids, touched.pushed)
         return total
 

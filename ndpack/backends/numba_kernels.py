@@ -378,7 +378,7 @@ def index_near(b, lower, upper, bound, counting, centers, radii, origin, top, he
             if mine:
                 if counting == 0:
                     gap = centre_gap(b, s, lower, upper, centers, radii) + half
-                    if gap < bound or (gap == bound and 0 <= s < nearest):
+                    if gap < bound or (gap == bound and s < nearest):
                         bound = gap
                         nearest = s
                 elif box_gap(b, s, lower, upper, centers, radii) <= bound:
