@@ -10,6 +10,8 @@
 #       before and now, Warp (cuda:0), numba-cuda and numba on the host's cores (bench/round_time.py)
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh profile   the per-round profile, before and now
 #       (bench/profile_kernels.py), on both GPU backends
+#   source .gpu2/setup.sh && bash bench/gpu_issue20.sh million   1,000,000 spheres in the armadillo and
+#       the unit cube on Warp, before and now (bench/scale.py)
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh tests     the GPU backends' tests
 set -uo pipefail
 source bench/gpu_header.sh
@@ -28,8 +30,16 @@ case "${1:-time}" in
       | tee "$OUT/profile_before.txt"
     timeout 280 python3 bench/profile_kernels.py --backends warp numba-cuda --mesh /tmp/armadillo.obj --count 100000 \
       --out "$OUT/profile_now_h100.json" 2>&1 | grep -v "^Warp\|^Module" | tee "$OUT/profile_now.txt" ;;
+  million)
+    for version in before now; do
+      path=$PWD; [ $version = before ] && path=$BEFORE
+      PYTHONPATH=$path:${PYTHONPATH:-} python3 -c "import ndpack; print(\"$version:\", ndpack.__file__)"
+      PYTHONPATH=$path:${PYTHONPATH:-} timeout 280 python3 bench/scale.py --cases armadillo cube --backends warp \
+        --mesh /tmp/armadillo.obj --counts 1000000 --faithful-count 0 --box-count 1000000 \
+        --out "$OUT/scale_million_h100_warp_$version.json" 2>&1 | grep -v "^Warp\|^Module" | tee "$OUT/million_$version.txt"
+    done ;;
   tests)
     timeout 570 python3 -m pytest -q -p no:cacheprovider tests/test_backends.py tests/test_scale.py tests/test_driver.py \
       -k "numba-cuda or warp or cuda or fast" 2>&1 | tail -15 | tee "$OUT/tests.txt" ;;
-  *) echo "unknown part $1: time, profile or tests" >&2; exit 2 ;;
+  *) echo "unknown part $1: time, profile, million or tests" >&2; exit 2 ;;
 esac

@@ -37,10 +37,13 @@ FAST_WINDOW = 0.2
 #: being filled are never much smaller than the cells that search for them.
 SPLIT_RATIO = 4.0
 #: Fast mode: fewer candidates than this at the top, late finds at the last round's size,
-#: join the next level's round (:meth:`Fast.choose`): 26-36% fewer rounds for 0.03-0.05%
-#: less fill in the armadillo at 40,000, 70,000 and 150,000 spheres, 29-43% fewer and within 0.01%
-#: in the unit cube at 30,000 and 100,000 (2 cores; docs/benchmarks.md).
-SMALL_ROUND = 64
+#: join the next level's round (:meth:`Fast.choose`), and fewer than that share of the spheres so
+#: far (at least the first number): on a GPU a round costs its launches' latency whatever its
+#: size, and at small counts 1,024 late finds are most of a round. Against a flat 64: 25-38% fewer
+#: rounds in the armadillo and the unit cube at 100,000 spheres for 0.02% less fill or none, the
+#: cube's fill against the faithful mode's at 1,000-10,000 unchanged (2 cores; docs/benchmarks.md).
+SMALL_ROUND = 1024
+SMALL_ROUND_FIRST, SMALL_ROUND_SHARE = 64, 1 / 16
 #: Fast mode: rounds of polishing the chosen candidates before the choice is made among the
 #: polished ones only (:meth:`Fast.choose`).
 POLISH_PASSES = 2
@@ -119,8 +122,9 @@ class Fast:
         """Every candidate within the window below the frontier or above it, largest first, kept
         where it is disjoint from the larger ones kept.
 
-        The frontier is the largest clearance, unless fewer than ``SMALL_ROUND`` candidates lie
-        within the window below it and they reach the last round's window: gaps found late (in
+        The frontier is the largest clearance, unless few candidates lie within the window below
+        it (fewer than ``SMALL_ROUND`` and than ``SMALL_ROUND_SHARE`` of the spheres so far, or
+        than ``SMALL_ROUND_FIRST``) and they reach the last round's window: gaps found late (in
         split cells, by restarts) at the last round's size. Those join the next level's round
         (the frontier is the largest clearance below them) instead of taking a round alone.
 
@@ -137,7 +141,8 @@ class Fast:
             if top <= 0:
                 return np.empty((0, state.dim)), np.empty(0)
             frontier = top
-            if top >= (1 - window) * self.frontier and len(store.select(low=(1 - window) * top)[0]) < SMALL_ROUND:
+            small = min(SMALL_ROUND, max(SMALL_ROUND_FIRST, int(SMALL_ROUND_SHARE * state.count)))
+            if top >= (1 - window) * self.frontier and len(store.select(low=(1 - window) * top)[0]) < small:
                 below = store.top(below=(1 - window) * top)
                 frontier = below if below > 0 else top
             ids, clearance, points, polished = store.candidates(low=(1 - window) * frontier)

@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 import ndpack as nd
+from ndpack import protosphere
 from ndpack.backends.numpy_backend import NumpyBackend
-from ndpack.protosphere import cooling_schedule, grid_counts
+from ndpack.protosphere import cooling_schedule, grid_counts, schedules
 
 
 def corner_radius(dim):
@@ -246,6 +247,28 @@ def test_cooling_schedule_and_grid():
     assert np.all(np.diff(steps) < 0)
     np.testing.assert_array_equal(grid_counts(np.array([[0, 0], [2, 1]]), 10), [10, 5])
     assert abs(np.prod(grid_counts(np.array([[0, 0, 0], [1, 1, 1]]))) - 32768) < 100
+
+
+@pytest.mark.parametrize("iterations", [1, 5, 50, 200])
+def test_fast_mode_cuts_the_schedules_where_they_cool_below_its_floors(iterations):
+    steps, polish = schedules("faithful", iterations)
+    np.testing.assert_array_equal(steps, cooling_schedule(iterations))
+    assert len(polish) == protosphere.POLISH_ITERATIONS and polish[-1] == pytest.approx(protosphere.POLISH_EPS_END)
+    fast_steps, fast_polish = schedules("fast", iterations)
+    # A prefix: the first steps' travel is kept, only the precision of the tail goes.
+    np.testing.assert_array_equal(fast_steps, steps[: len(fast_steps)])
+    np.testing.assert_array_equal(fast_polish, polish[: len(fast_polish)])
+    assert fast_steps.min() >= protosphere.FAST_EPS_END and fast_polish.min() >= protosphere.FAST_POLISH_EPS_END
+    if len(fast_steps) < len(steps):
+        assert steps[len(fast_steps)] < protosphere.FAST_EPS_END
+    assert polish[len(fast_polish)] < protosphere.FAST_POLISH_EPS_END
+
+
+def test_a_fast_packing_records_where_its_schedules_stop():
+    packing = nd.pack(nd.Box([0, 0], [1, 1]), n=20, mode="fast", seed=0)
+    assert packing.params["fast_eps_end"] == protosphere.FAST_EPS_END
+    assert packing.params["fast_polish_eps_end"] == protosphere.FAST_POLISH_EPS_END
+    assert "fast_eps_end" not in nd.pack(nd.Box([0, 0], [1, 1]), n=5, seed=0).params
 
 
 @pytest.mark.parametrize(
