@@ -53,7 +53,7 @@ POLISH_ITERATIONS, POLISH_EPS_START, POLISH_EPS_END, POLISH_POWER = 100, 0.05, 1
 #: steps, the polish after 60 of 100). A prototype zig-zagging towards a Voronoi node falls short
 #: of it by about ``eps`` times its clearance, so a cut polish gives up a median 4e-6 of the
 #: clearance (99% within 2e-5, at most 1.4e-4; armadillo, 30,000 spheres), far below what the fast
-#: window gives away, for 16-24% fewer move steps and 40% fewer polish steps (docs/benchmarks.md).
+#: window gives away, for about 20% fewer move steps and 40% fewer polish steps (docs/benchmarks.md).
 FAST_EPS_END, FAST_POLISH_EPS_END = 1e-4, 2e-5
 #: A prototype swallowed by a new sphere may restart this factor of its radius from its centre.
 PUSH_OUT = 1.001
