@@ -36,12 +36,13 @@ FAST_WINDOW = 0.2
 #: many times the largest clearance and the cell could still hold a candidate, so that the gaps
 #: being filled are never much smaller than the cells that search for them.
 SPLIT_RATIO = 4.0
-#: Fast mode: fewer candidates than this at the top, late finds at the last round's size,
-#: join the next level's round (:meth:`Fast.choose`), and fewer than that share of the spheres so
-#: far (at least the first number): on a GPU a round costs its launches' latency whatever its
-#: size, and at small counts 1,024 late finds are most of a round. Against a flat 64: 25-38% fewer
-#: rounds in the armadillo and the unit cube at 100,000 spheres for 0.02% less fill or none, the
-#: cube's fill against the faithful mode's at 1,000-10,000 unchanged (2 cores; docs/benchmarks.md).
+#: Fast mode: late finds (candidates at the last round's size, found in split cells or by
+#: restarts) join the next level's round when they are fewer than ``SMALL_ROUND`` and fewer than
+#: ``SMALL_ROUND_SHARE`` of the spheres so far, and always when fewer than ``SMALL_ROUND_FIRST``
+#: (see :meth:`Fast.choose`). On a GPU a round costs its launches' latency whatever its size; the share
+#: keeps small counts from merging most of a round. Against a flat 64: 25-38% fewer rounds in the
+#: armadillo and the unit cube at 100,000 spheres for 0.02% less fill or none (2 cores;
+#: docs/benchmarks.md).
 SMALL_ROUND = 1024
 SMALL_ROUND_FIRST, SMALL_ROUND_SHARE = 64, 1 / 16
 #: Fast mode: rounds of polishing the chosen candidates before the choice is made among the
@@ -123,8 +124,7 @@ class Fast:
         where it is disjoint from the larger ones kept.
 
         The frontier is the largest clearance, unless few candidates lie within the window below
-        it (fewer than ``SMALL_ROUND`` and than ``SMALL_ROUND_SHARE`` of the spheres so far, or
-        than ``SMALL_ROUND_FIRST``) and they reach the last round's window: gaps found late (in
+        it (see ``SMALL_ROUND``) and they reach the last round's window: gaps found late (in
         split cells, by restarts) at the last round's size. Those join the next level's round
         (the frontier is the largest clearance below them) instead of taking a round alone.
 
@@ -135,14 +135,14 @@ class Fast:
         wait for the next round).
         """
         store, window = state.prototypes, self.window
+        few = min(SMALL_ROUND, max(SMALL_ROUND_FIRST, int(SMALL_ROUND_SHARE * state.count)))
         passes = 0
         while True:
             top = store.top()
             if top <= 0:
                 return np.empty((0, state.dim)), np.empty(0)
             frontier = top
-            small = min(SMALL_ROUND, max(SMALL_ROUND_FIRST, int(SMALL_ROUND_SHARE * state.count)))
-            if top >= (1 - window) * self.frontier and len(store.select(low=(1 - window) * top)[0]) < small:
+            if top >= (1 - window) * self.frontier and len(store.select(low=(1 - window) * top)[0]) < few:
                 below = store.top(below=(1 - window) * top)
                 frontier = below if below > 0 else top
             ids, clearance, points, polished = store.candidates(low=(1 - window) * frontier)
