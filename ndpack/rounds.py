@@ -138,14 +138,15 @@ class Fast:
         few = min(SMALL_ROUND, max(SMALL_ROUND_FIRST, int(SMALL_ROUND_SHARE * state.count)))
         passes = 0
         while True:
-            top = store.top()
+            ids, clearance, points, polished, top = store.window(window)  # one query: one sync on a GPU
             if top <= 0:
                 return np.empty((0, state.dim)), np.empty(0)
             frontier = top
-            if top >= (1 - window) * self.frontier and len(store.select(low=(1 - window) * top)[0]) < few:
+            if top >= (1 - window) * self.frontier and len(ids) < few:
                 below = store.top(below=(1 - window) * top)
-                frontier = below if below > 0 else top
-            ids, clearance, points, polished = store.candidates(low=(1 - window) * frontier)
+                if below > 0:
+                    frontier = below
+                    ids, clearance, points, polished = store.candidates(low=(1 - window) * frontier)
             order = top_order(ids, clearance, min(MAX_CANDIDATES, len(ids)))
             ids, clearance, points, polished = ids[order], clearance[order], points[order], polished[order]
             radii, usable = _usable(state, clearance, min_radius)

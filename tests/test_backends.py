@@ -233,6 +233,10 @@ def _exercise(store, centers, radii, rng):
     answers["unpolished"] = store.select(unpolished=True)[0]
     answers["candidates"] = store.candidates(low=0.5 * store.top())
     assert answers["candidates"][3].any() and not answers["candidates"][3].all()  # polished and not
+    # The fast round's one query: the largest clearance and the candidates within 50% below it.
+    answers["window"] = store.window(0.5)
+    assert answers["window"][4] == store.top()
+    np.testing.assert_array_equal(answers["window"][0], answers["candidates"][0])
     answers["low"] = store.select(high=0.02)
     # The largest clearance, and the largest below the 10th largest (the fast mode's frontier).
     tenth = np.sort(store.all()[1])[-10]

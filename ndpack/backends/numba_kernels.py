@@ -319,8 +319,8 @@ def index_near(b, lower, upper, bound, counting, centers, radii, origin, top, he
     -1 if none did.
     ``counting`` 1: counts the spheres that come within ``bound`` of the box, and writes the
     first ``width`` of them into ``out[row]``. Both visit the cells of each level within ``bound``
-    (plus the level's largest radius) of the box, or the level's list where that is shorter.
-    Returns ``(bound, count)``.
+    (plus the level's largest radius) of the box, or the level's list where that is shorter;
+    ``counting`` 0 with the bound as tightened by the coarser levels. Returns ``(bound, count)``.
     """
     half2 = 0.0
     for k in range(D):
@@ -336,6 +336,8 @@ def index_near(b, lower, upper, bound, counting, centers, radii, origin, top, he
     for level in range(level_head.shape[0]):
         if level_count[level] == 0:
             continue
+        if counting == 0:  # a sphere tightens the bound only within it: look no farther than that
+            reach = bound
         side = top * 0.5 ** level
         cells = 1.0
         for k in range(D):

@@ -97,6 +97,13 @@ class Prototypes:
         is polished (m,) bool."""
         raise NotImplementedError
 
+    def window(self, fraction: float):
+        """The largest clearance and the prototypes within ``fraction`` below it, as
+        :meth:`candidates` gives them (with ``low = (1 - fraction)`` times it), in one query:
+        ids, clearances, points, polish flags and the largest clearance (a float). None are given
+        when the largest is not positive."""
+        raise NotImplementedError
+
     def leaders(self, k: int, window: float):
         """The ``k`` largest clearances (fewer if n < k), largest first, and the unpolished near them.
 
@@ -176,6 +183,12 @@ class HostPrototypes(Prototypes):
     def candidates(self, low):
         ids = np.flatnonzero(self.clearance >= low)
         return ids, self.clearance[ids], self.points[ids], self.polished[ids]
+
+    def window(self, fraction):
+        top = self.top()
+        if not top > 0:
+            return (*self.candidates(np.inf), top)
+        return (*self.candidates((1 - fraction) * top), top)
 
     def leaders(self, k, window):
         k = min(k, len(self))
@@ -271,7 +284,7 @@ class DevicePrototypes(Prototypes):
         self.d_nearest = None  # (n, 1): the touched query's nearest new sphere per prototype
         self.sphere_index = DeviceIndex(self.dim, device)
         self.width = self.FIRST_WIDTH
-        self.prefix = min(count, self.FIRST_PREFIX)
+        self.prefix = {}  # kernel name -> answer rows its next query copies with the counter
         self._window = FIRST_WINDOW
         self._steps = {}
 
@@ -292,39 +305,60 @@ class DevicePrototypes(Prototypes):
         self.answers = tuple(device.empty(len(self), kind) for kind in ("index", "float", "point", "index"))
         return new
 
-    def _compact(self, kernel, *args):
-        """Run a kernel that appends matches: ids (m,) ascending, their clearances, points (m, d)
-        and polish flags, and the device's last maximum (``d_top``), with one synchronisation."""
+    def _compact(self, kernel, *args, fields=(0, 1, 2, 3), top=False):
+        """Run a kernel that appends matches, with one synchronisation: ids (m,) ascending, their
+        clearances, points (m, d) and polish flags (those not among ``fields``, ascending
+        positions in that order starting with the ids, come back None, uncopied), and with
+        ``top`` the device's last maximum (``d_top``), else NaN.
+
+        The first copy takes a prefix of each answer, sized from this kernel's last answer (a
+        round's queries differ by orders of magnitude); a longer answer is copied again whole.
+        """
         device = self.device
         device.fill(self.d_counter, 0)
         device.launch(kernel, len(self), *args, self.d_counter, *self.answers)
-        counter, top, *answers = device.fetch(
-            (self.d_counter, 1), (self.d_top, 1), *[(answer, self.prefix) for answer in self.answers]
+        prefix = self.prefix.get(kernel, min(len(self), self.FIRST_PREFIX))
+        wanted = [self.answers[field] for field in fields]
+        counter, *answers = device.fetch(
+            (self.d_counter, 1), *([(self.d_top, 1)] if top else []), *[(answer, prefix) for answer in wanted]
         )
+        maximum = float(answers.pop(0)[0]) if top else np.nan
         count = int(counter[0])
-        if count > self.prefix:
-            answers = device.fetch(*[(answer, count) for answer in self.answers])
-        self.prefix = min(len(self), max(self.FIRST_PREFIX, 2 * count))
-        ids, clearance, points, flags = [answer[:count] for answer in answers]
-        order = np.argsort(ids)  # atomics append in any order; sorting makes runs repeatable
-        return ids[order], clearance[order], points[order], flags[order], float(top[0])
+        if count > prefix:
+            answers = device.fetch(*[(answer, count) for answer in wanted])
+        self.prefix[kernel] = min(len(self), max(self.FIRST_PREFIX, 2 * count))
+        answers = [answer[:count] for answer in answers]
+        order = np.argsort(answers[0])  # atomics append in any order; sorting makes runs repeatable
+        out = [None] * 4
+        for field, answer in zip(fields, answers):
+            out[field] = answer[order]
+        return (*out, maximum)
 
-    def _select(self, low=-np.inf, high=np.inf, unpolished=False, relative=-1.0):
+    def _select(self, low=-np.inf, high=np.inf, unpolished=False, relative=-1.0, ids_only=False):
         """:meth:`select`, and with ``relative >= 0`` the low bound raised to ``(1 - relative)``
-        times the maximum where that is positive; the maximum is found on the device first."""
+        times the maximum where that is positive; the maximum is found on the device first.
+        ``ids_only``: the points and polish flags stay on the device (None)."""
         if relative >= 0:
             self.device.fill(self.d_top, -np.inf)
             self.device.launch("max_all", len(self), self.d_clearance, np.inf, self.d_top)
+        fields = (0, 1) if ids_only else (0, 1, 2, 3)
         return self._compact("select_all", self.d_clearance, self.d_polished, self.d_points, float(low),
-                             float(high), int(unpolished), self.d_top, float(relative))
+                             float(high), int(unpolished), self.d_top, float(relative), fields=fields,
+                             top=relative >= 0)
 
     def select(self, low=-np.inf, high=np.inf, unpolished=False):
-        ids, clearance, _, _, _ = self._select(low, high, unpolished)
+        ids, clearance, _, _, _ = self._select(low, high, unpolished, ids_only=True)
         return ids, clearance
 
     def candidates(self, low):
         ids, clearance, points, polished, _ = self._select(low)
         return ids, clearance, points, polished != 0
+
+    def window(self, fraction):
+        # The kernel raises ``low`` to the window's floor only where the largest is positive;
+        # ``low`` keeps the others (everything, at a run's end) on the device.
+        ids, clearance, points, polished, top = self._select(low=np.finfo(np.float32).tiny, relative=fraction)
+        return ids, clearance, points, polished != 0, top
 
     def top(self, below=np.inf):
         self.device.fill(self.d_top, -np.inf)
@@ -356,7 +390,7 @@ class DevicePrototypes(Prototypes):
         # The kernel sends each one's nearest new sphere back in the polish flags' place.
         ids, _, points, nearest, _ = self._compact(
             "touched_index_select", self.d_points, self.d_clearance, self.d_polished, up(new_centers, "point"),
-            up(new_radii, "float"), *index, self.d_nearest)
+            up(new_radii, "float"), *index, self.d_nearest, fields=(0, 2, 3))
         return ids, points, nearest.astype(np.int64)
 
     def gather(self, ids):

@@ -303,6 +303,8 @@ def index_near(lo: VecD, hi: VecD, bound: F, counting: int, centers: wp.array(dt
             side = side * F(0.5)
         if level_count[level] == 0:
             continue
+        if counting == 0:  # a sphere tightens the bound only within it: look no farther than that
+            reach = bound
         cells = F(1.0)
         for k in range(D):
             low[k] = wp.floor((lo[k] - reach - level_rmax[level] - origin[k]) / side) - slack
