@@ -5,7 +5,8 @@
 #   mkdir -p .gpu4/before && git archive b7017d9 ndpack bench/profile_kernels.py | tar -x -C .gpu4/before
 #   xz -9 -c ../shared/data/meshes/armadillo.obj > .gpu4/armadillo.obj.xz && echo /.gpu4/ >> .git/info/exclude
 # and carried with .gpu2 (carry: [".gpu2", ".gpu4"]). BEFORE=path compares with another version
-# (the second session measured against .gpu4/before583, made alike from commit 583b665).
+# (the second session measured against .gpu4/before583, made alike from commit 583b665; the third
+# against .gpu4/before5623, from 5623dfb; the fourth against .gpu4/before06c, from 06c4321).
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh time      100,000 spheres in the armadillo,
 #       before and now, Warp (cuda:0), numba-cuda and numba on the host's cores (bench/round_time.py)
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh profile   the per-round profile, before and now
