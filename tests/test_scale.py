@@ -25,12 +25,16 @@ def test_index_finds_the_spheres_the_reference_finds(dim):
     upper = lower + rng.random((300, 1)) * np.array([0.001, 0.03, 0.3])[rng.integers(0, 3, 300)][:, None]
     reach = rng.random(300) * 0.5
     backend = NumbaBackend()
+    widths = []
     for count in (1, 700, 2000):  # grows: the index adds only the new spheres
         expected, expected_bound = REFERENCE.near_spheres(lower, upper, reach, centers[:count], radii[:count],
                                                           return_bound=True)
         got, bound = backend.near_spheres(lower, upper, reach, centers[:count], radii[:count], return_bound=True)
         np.testing.assert_array_equal(got, expected)
         np.testing.assert_allclose(bound, expected_bound, rtol=0, atol=1e-12)
+        widths.append(got.shape[1])
+    # The table is filled as wide as the last call's widest rows: the rows beyond that walk again.
+    assert widths[0] < 8 < widths[2], widths
     # Other spheres (not an extension of the indexed ones) start a fresh index.
     moved = centers[:500] + 0.01
     np.testing.assert_array_equal(backend.near_spheres(lower, upper, reach, moved, radii[:500]),

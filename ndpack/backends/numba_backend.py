@@ -94,7 +94,7 @@ class NumbaBackend(Backend):
         self.numba = numba
         self.threads = threads
         self._indexes = {}  # dim -> SphereIndex of the spheres last asked about
-        self._widths = {}  # dim -> the widest neighbour row of the last near_spheres
+        self._widths = {}  # dim -> near_spheres' first table width (its recent widest rows)
 
     def _kernels(self, shape):
         """The compiled namespace that runs ``shape``, its numbers and its finite-difference step."""
@@ -152,14 +152,14 @@ class NumbaBackend(Backend):
         counts = np.empty(count, dtype=np.int64)
         query = namespace["index_query"]
         self._run(query, lower, upper, bound, 0, centers, radii, *index, counts, np.empty((count, 0), dtype=np.int64))
-        # Count and fill in one walk, in a table as wide as the widest row of the last call; only
-        # the rows that overflow it walk again (a walk per pass is a third of this call's time).
+        # Count and fill in one walk, in a table as wide as the last calls' widest rows; only the
+        # rows that overflow it walk again (a walk per pass is a third of this call's time).
         dim = box_lower.shape[1]
         width = self._widths.get(dim, 8)
         table = np.full((count, width), len(centers), dtype=np.int64)
         self._run(query, lower, upper, bound, 1, centers, radii, *index, counts, table)
         widest = int(counts.max())
-        self._widths[dim] = widest
+        self._widths[dim] = max(widest, width // 2)  # one narrow call does not narrow the next
         if widest > width:
             over = np.flatnonzero(counts > width)
             wide = np.full((len(over), widest), len(centers), dtype=np.int64)
