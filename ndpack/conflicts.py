@@ -71,8 +71,8 @@ def greedy_over_pairs(count, first, second):
     Each pass keeps every undecided item whose higher-priority rivals are all decided and none
     kept, and drops every undecided item with a kept rival: the same set as deciding one item
     after another, in as many passes as the longest chain of rivals (a priority-based
-    independent set, as a device would compute it). Measured: 2-6 passes a round in the
-    armadillo and the unit cube.
+    independent set, as a device would compute it). Measured: 2-7 passes a round, 3 in most
+    (the armadillo and the unit cube at 100,000 spheres).
     """
     undecided, kept = np.ones(count, dtype=bool), np.zeros(count, dtype=bool)
     while len(first):

@@ -334,20 +334,20 @@ class DevicePrototypes(Prototypes):
             out[field] = answer[order]
         return (*out, maximum)
 
-    def _select(self, low=-np.inf, high=np.inf, unpolished=False, relative=-1.0, ids_only=False):
+    def _select(self, low=-np.inf, high=np.inf, unpolished=False, relative=-1.0, points=True):
         """:meth:`select`, and with ``relative >= 0`` the low bound raised to ``(1 - relative)``
         times the maximum where that is positive; the maximum is found on the device first.
-        ``ids_only``: the points and polish flags stay on the device (None)."""
+        ``points=False``: the points and polish flags stay on the device (None)."""
         if relative >= 0:
             self.device.fill(self.d_top, -np.inf)
             self.device.launch("max_all", len(self), self.d_clearance, np.inf, self.d_top)
-        fields = (0, 1) if ids_only else (0, 1, 2, 3)
+        fields = (0, 1, 2, 3) if points else (0, 1)
         return self._compact("select_all", self.d_clearance, self.d_polished, self.d_points, float(low),
                              float(high), int(unpolished), self.d_top, float(relative), fields=fields,
                              top=relative >= 0)
 
     def select(self, low=-np.inf, high=np.inf, unpolished=False):
-        ids, clearance, _, _, _ = self._select(low, high, unpolished, ids_only=True)
+        ids, clearance, _, _, _ = self._select(low, high, unpolished, points=False)
         return ids, clearance
 
     def candidates(self, low):
