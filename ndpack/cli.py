@@ -36,7 +36,12 @@ output formats (by suffix, or --format):
 VERIFY_EXAMPLES = """examples:
   ndpack verify cow.npz                         # the shape recorded in the file
   ndpack verify spheres.csv --shape part.stl    # a packing made elsewhere, against a mesh
+  ndpack verify part.npz --shape part.py        # a script's shape: named by you, not the file
 exit status: 0 valid, 1 a violation, 2 bad input.
+
+A file's recorded shape is used only where it is data (a mesh file or a built-in shape):
+a packing file may come from anyone, and one naming a script or module is never run unless
+you pass --shape or --trust-source.
 """
 
 RENDER_EXAMPLES = """examples:
@@ -127,6 +132,8 @@ def _parser() -> argparse.ArgumentParser:
     verify.add_argument("packing", help="a packing file (.npz, .csv, .json, ...)")
     verify.add_argument("--shape", help="the shape to check against (default: the one the file records)")
     verify.add_argument("--tol", type=float, help="overlap and containment tolerance (default: ndpack's)")
+    verify.add_argument("--trust-source", action="store_true",
+                        help="run the script or module the file records as its shape (only for files you trust)")
 
     render = commands.add_parser("render", help="draw a saved packing to .png, .svg or .pdf", formatter_class=raw,
                                  epilog=RENDER_EXAMPLES)
@@ -141,6 +148,8 @@ def _parser() -> argparse.ArgumentParser:
     render.add_argument("--at", type=_numbers, help="a point of the slice (default: the centres' mean)")
     render.add_argument("--clip", type=_numbers, help="px,py,pz,nx,ny,nz: drop spheres beyond this plane")
     render.add_argument("--shape", help="the shape whose outline a slice draws (default: the recorded one)")
+    render.add_argument("--trust-source", action="store_true",
+                        help="run the script or module the file records as its shape (only for files you trust)")
 
     info = commands.add_parser("info", help="summarise a saved packing", formatter_class=raw, epilog=INFO_EXAMPLES)
     info.add_argument("packing", help="a packing file")
@@ -230,23 +239,38 @@ def _load(path: str):
     return load(path)
 
 
-def _recorded_shape(packing, override: str | None, required: bool):
-    """The shape given on the command line, else the one the packing records (``params["source"]``)."""
-    from .sources import load_shape
+def _recorded_shape(packing, override: str | None, required: bool, trust: bool = False):
+    """The shape given on the command line, else the one the packing records (``params["source"]``).
 
-    source = override or packing.params.get("source")
+    A recorded source that would run code (a script, a module, a package's plug-in) is used
+    only with ``trust``: otherwise a crafted file could run anything on ``ndpack verify``.
+    Where the shape is not ``required`` such a source is skipped with a note on stderr."""
+    from .sources import code_in, load_shape
+
+    if override:
+        return load_shape(override)
+    source = packing.params.get("source")
     if source is None:
         if required:
             raise NdpackError("this packing does not record its shape (made outside `ndpack pack`): pass --shape")
         return None
-    return load_shape(source)
+    code = code_in(str(source))
+    if code and not trust:
+        advice = (f"ndpack does not run code a file names: if you trust it, pass --shape {source} "
+                  f"(or --trust-source)")
+        if required:
+            raise NdpackError(f"this packing records its shape as {code}; {advice}")
+        print(f"ndpack: drawn without the outline: the packing records its shape as {code}; {advice}",
+              file=sys.stderr)
+        return None
+    return load_shape(str(source))
 
 
 def _verify(args) -> int:
     from .verify import verify
 
     packing = _load(args.packing)
-    shape = _recorded_shape(packing, args.shape, required=True)
+    shape = _recorded_shape(packing, args.shape, required=True, trust=args.trust_source)
     report = verify(packing, shape, args.tol)
     print(f"{args.packing}: {len(packing)} spheres in {packing.dim}-D against {shape!r}")
     print(f"verified: {report.summary()}")
@@ -275,7 +299,7 @@ def _render(args) -> int:
     elif draws_circles:
         _refuse({name: options[name] for name in ("size", "view", "clip") if name in options},
                 "a picture of circles (2-D, a slice, .svg or .pdf)")
-        shape = _recorded_shape(packing, args.shape, required=False)
+        shape = _recorded_shape(packing, args.shape, required=False, trust=args.trust_source)
         if shape is not None:
             options["shape"] = shape
     print(f"wrote {picture(packing, output, kind=kind, **options)}")

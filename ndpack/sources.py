@@ -11,7 +11,9 @@
 
 :func:`load_shape` turns the string into an oracle and explains any mistake in one line. A
 packing made from a source records it (``params["source"]``), so ``ndpack verify`` and
-``ndpack render`` can rebuild the shape later.
+``ndpack render`` can rebuild the shape later, but only where it is data (a mesh file or a
+built-in spec): a packing file may come from anyone, and :func:`code_in` says which recorded
+sources would run code (a script, a module, an installed package's plug-in).
 """
 
 from __future__ import annotations
@@ -119,6 +121,27 @@ def _checked(shape, source: str):
             f"trimesh or shapely solid"
         )
     return shape
+
+
+def code_in(source: str) -> str | None:
+    """What code :func:`load_shape` would run for ``source``, in words, or None where it only
+    reads data (a mesh file, a built-in shape spec). Decided from the text alone, the same way
+    :func:`load_shape` decides, without touching the file system beyond ``is_file``."""
+    from .builtin import BUILTIN
+
+    text = source.strip()
+    path = Path(text).expanduser()
+    suffix = path.suffix.lower()
+    if suffix == ".py":
+        return f"the Python script {text}"
+    if suffix in MESH_SUFFIXES or path.is_file() or "/" in text or os.sep in text:
+        return None  # a mesh file: trimesh reads it as data
+    name, colon, rest = text.partition(":")
+    if name.strip().lower() in BUILTIN:
+        return None
+    if not colon or "=" in rest:
+        return f"the shape plug-in of an installed package ({name.strip()!r})"
+    return f"the module {name.strip()!r}"
 
 
 def describe(source: str) -> str:

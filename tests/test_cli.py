@@ -108,8 +108,14 @@ def test_pack_a_script_and_a_plugin(tmp_path):
     assert result.returncode == 0, result.stderr
     packing = nd.Packing.load(out)
     assert np.all(packing.radii <= 0.125 + 1e-9)
-    assert run("verify", str(out)).returncode == 2  # the module is beside the file, not here: one line
-    result = subprocess.run([sys.executable, "-m", "ndpack.cli", "verify", str(out)], capture_output=True, text=True,
+    # A recorded module is code: verify runs it only when told to, and only where it imports.
+    verify_here = [sys.executable, "-m", "ndpack.cli", "verify", str(out)]
+    one_line_error(subprocess.run(verify_here, capture_output=True, text=True, timeout=300, cwd=tmp_path),
+                   "module 'my_plugin_shapes'", "--trust-source")
+    one_line_error(run("verify", str(out), "--trust-source"), "no module")  # not beside the file
+    result = subprocess.run([*verify_here, "--trust-source"], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    result = subprocess.run([*verify_here, "--shape", "my_plugin_shapes:slab"], capture_output=True, text=True,
                             timeout=300, cwd=tmp_path)
     assert result.returncode == 0, result.stderr
 
@@ -253,3 +259,33 @@ def test_a_repaired_packing_says_so_in_its_files_and_in_info(saved_square, tmp_p
         result = run("info", str(tmp_path / name))
         assert result.returncode == 0, result.stderr
         assert "repaired:   3 sphere(s) shrunk and 0 dropped" in result.stdout and "a test" in result.stdout
+
+
+def test_a_packing_file_never_runs_the_code_it_names(saved_square, tmp_path):
+    """A packing someone sent you may record a script or a module as its shape: verify,
+    render and info must run neither (each would leave a marker file)."""
+    script = tmp_path / "elsewhere" / "payload.py"
+    script.parent.mkdir()
+    script.write_text(f"open({str(tmp_path / 'script-ran')!r}, 'w').close()\nimport ndpack as nd\n"
+                      f"shape = nd.Box([0, 0], [1, 1])\n")
+    (tmp_path / "payload_module.py").write_text(
+        f"open({str(tmp_path / 'module-ran')!r}, 'w').close()\nimport ndpack as nd\n"
+        f"shape = nd.Box([0, 0], [1, 1])\n")
+    square = nd.Packing.load(saved_square)
+    for source, marker, words in ((str(script), "script-ran", "Python script"),
+                                  ("payload_module:shape", "module-ran", "module 'payload_module'")):
+        crafted = tmp_path / f"crafted-{marker}.npz"
+        square.params["source"] = source
+        square.save(crafted)
+
+        def here(*args):
+            return subprocess.run([sys.executable, "-m", "ndpack.cli", *args], capture_output=True, text=True,
+                                  timeout=300, cwd=tmp_path)
+
+        one_line_error(here("verify", str(crafted)), words, "--shape")
+        result = here("render", str(crafted), "-o", str(tmp_path / "picture.svg"))
+        assert result.returncode == 0 and "without the outline" in result.stderr, result.stderr
+        assert here("info", str(crafted)).returncode == 0
+        assert not (tmp_path / marker).exists(), f"{source} ran"
+        assert here("verify", str(crafted), "--trust-source").returncode == 0  # asked for: it runs
+        assert (tmp_path / marker).exists()

@@ -202,3 +202,27 @@ def test_an_unwritable_cache_setting_falls_back_to_the_temporary_folder(tmp_path
     monkeypatch.setattr(kernel_compile.tempfile, "gettempdir", lambda: str(tmp_path / "tmp"))
     folder = kernel_compile.cache_folder("numba")
     assert folder == tmp_path / "tmp" / "ndpack-cache" / "numba" and os.access(folder, os.W_OK)
+
+
+def test_a_cache_folder_of_another_user_is_refused(tmp_path, monkeypatch):
+    # Anyone can create /tmp/ndpack-cache first on a shared machine; modules are imported from it.
+    monkeypatch.setenv("NDPACK_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setattr(kernel_compile.tempfile, "gettempdir", lambda: str(tmp_path / "tmp"))
+    (tmp_path / "cache" / "numba").mkdir(parents=True)
+    (tmp_path / "tmp" / "ndpack-cache" / "numba").mkdir(parents=True)
+    someone_else = os.getuid() + 1
+    monkeypatch.setattr(kernel_compile.os, "getuid", lambda: someone_else)
+    with pytest.raises(OSError, match="belongs to another user.*NDPACK_CACHE"):
+        kernel_compile.cache_folder("numba")
+
+
+def test_a_cache_folder_is_private(tmp_path, monkeypatch):
+    monkeypatch.setenv("NDPACK_CACHE", str(tmp_path / "new"))
+    folder = kernel_compile.cache_folder("numba")
+    assert folder.stat().st_mode & 0o777 == 0o700 and folder.parent.stat().st_mode & 0o077 == 0
+    shared = tmp_path / "shared"
+    (shared / "numba").mkdir(parents=True)
+    shared.chmod(0o777)
+    monkeypatch.setenv("NDPACK_CACHE", str(shared))
+    kernel_compile.cache_folder("numba")
+    assert shared.stat().st_mode & 0o022 == 0  # ours, so others lose the right to write

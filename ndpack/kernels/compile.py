@@ -49,18 +49,41 @@ def cache_folder(kind: str = "warp") -> Path:
 
     ``$NDPACK_CACHE`` or ``~/.cache/ndpack``; where that cannot be written (a read-only home),
     a folder in the system's temporary folder, so compiling still works and the code is kept
-    as long as that folder is.
+    as long as that folder is. Python is imported from this folder and Numba unpickles its
+    cache there, so a folder is made private (0700) and one that another user owns or may
+    write is refused (:func:`_private`): on a shared machine anyone can create ``/tmp/ndpack-cache``.
     """
     root = os.environ.get("NDPACK_CACHE") or os.path.join(os.path.expanduser("~"), ".cache", "ndpack")
+    refusals = []
     for base in (Path(root), Path(tempfile.gettempdir()) / "ndpack-cache"):
         folder = base / kind
         try:
-            folder.mkdir(parents=True, exist_ok=True)
+            base.mkdir(mode=0o700, parents=True, exist_ok=True)
+            folder.mkdir(mode=0o700, exist_ok=True)
         except OSError:
             continue
-        if os.access(folder, os.W_OK):
+        problem = _private(base) or _private(folder)
+        if problem:
+            refusals.append(problem)
+        elif os.access(folder, os.W_OK):
             return folder
-    raise OSError(f"no writable folder for compiled kernels: set NDPACK_CACHE to one ({root} is not)")
+    why = "; ".join(refusals) or f"{root} cannot be written"
+    raise OSError(f"no safe writable folder for compiled kernels ({why}): set NDPACK_CACHE to a folder of your own")
+
+
+def _private(folder: Path) -> str | None:
+    """Why ``folder`` is not safe to import code from, or None where it is. A folder of
+    another user is refused; one of ours that others may write (made under a umask of 002)
+    loses that permission, as the refusal would otherwise ask the user to do."""
+    status = folder.stat()
+    if hasattr(os, "getuid") and status.st_uid != os.getuid():
+        return f"{folder} belongs to another user (uid {status.st_uid})"
+    if os.name == "posix" and status.st_mode & 0o022:
+        try:
+            folder.chmod(status.st_mode & 0o755)
+        except OSError:
+            return f"{folder} may be written by other users (mode {status.st_mode & 0o777:o}): chmod go-w it"
+    return None
 
 
 def _import_generated(text: str, kind: str):
