@@ -1,26 +1,40 @@
 """Where a fast-mode packing's time goes, by device kernel and by driver phase.
 
     python bench/profile_kernels.py --backends warp numba-cuda --count 100000 [--mesh armadillo.obj]
+        [--variants now no-ahead] [--repeats 2] [--host-profile]
 
 Every kernel launch of the device store is made synchronous and timed (so its time is the
 device's, launch included; copies queued before it are waited for first, and not counted).
 The driver's phases are timed inclusively
 (``refine`` contains ``_split``, which contains ``reconverge``). Synchronising every launch
 slows the run down: the total is not the unprofiled time. Compiles first (a 3-sphere packing).
+
+``--variants`` compares, in one process, the code as it is (``now``) with a policy turned off:
+``no-ahead`` does not polish ahead (``rounds.POLISH_AHEAD``, the backend's ``launch_bound``).
+Each variant is also timed unprofiled ``--repeats`` times (median). ``--host-profile`` prints
+the host's cProfile of one unprofiled ``now`` run (by own time, then ndpack's functions by
+inclusive time): where the host works and waits.
 """
 
 from __future__ import annotations
 
 import argparse
 import collections
+import cProfile
 import functools
 import json
+import pstats
+import statistics
 import time
 
 import numpy as np
 
 import ndpack as nd
 from ndpack import protosphere, rounds
+from ndpack.backends import get_backend
+
+#: Whether each variant polishes ahead.
+VARIANTS = {"now": True, "no-ahead": False}
 
 #: Driver phases timed inclusively: (owner, attribute name).
 PHASES = [
@@ -97,38 +111,65 @@ def install(recorder):
     return undo
 
 
+def _report(name, packing, wall, recorder, timed):
+    rounds = len(packing.stats.time)
+    print(f"== {name}: {len(packing.radii)} spheres, {rounds} rounds, fill {packing.fill:.5f}; unprofiled "
+          f"{', '.join(f'{t:.2f}' for t in timed) or '-'} s; {wall:.2f} s with every launch synchronised")
+    device = sum(entry[1] for entry in recorder.kernels.values())
+    print(f"   device kernels {device:.2f} s in {sum(e[0] for e in recorder.kernels.values())} launches")
+    print(f"   {'kernel':28s} {'calls':>6s} {'seconds':>8s} {'ms/call':>8s} {'threads':>10s} {'max':>8s}")
+    for kernel, (calls, seconds, threads, most) in sorted(recorder.kernels.items(), key=lambda item: -item[1][1]):
+        print(f"   {kernel:28s} {calls:6d} {seconds:8.3f} {1e3 * seconds / calls:8.3f} {threads:10d} {most:8d}")
+    print(f"   {'phase (inclusive)':28s} {'calls':>6s} {'seconds':>8s}")
+    for phase, (calls, seconds) in sorted(recorder.phases.items(), key=lambda item: -item[1][1]):
+        print(f"   {phase:28s} {calls:6d} {seconds:8.3f}")
+    return dict(spheres=len(packing.radii), rounds=rounds, fill=packing.fill, wall=wall, unprofiled=timed,
+                median=statistics.median(timed) if timed else None, device=device,
+                kernels=dict(recorder.kernels), phases=dict(recorder.phases))
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--backends", nargs="+", default=["warp"])
     parser.add_argument("--count", type=int, default=100_000)
     parser.add_argument("--mesh", default=None, help="a mesh file; default the unit cube")
+    parser.add_argument("--variants", nargs="+", default=["now"], choices=list(VARIANTS))
+    parser.add_argument("--repeats", type=int, default=0, help="unprofiled runs per variant (median)")
+    parser.add_argument("--host-profile", action="store_true", help="cProfile one unprofiled run of `now`")
     parser.add_argument("--out", default=None, help="write the tables as JSON here")
     args = parser.parse_args()
     shape = nd.TriangleMesh.load(args.mesh) if args.mesh else nd.Box(np.zeros(3), np.ones(3))
     results = {}
-    for backend in args.backends:
+    for name in args.backends:
+        backend = get_backend(name)
         nd.pack(shape, 3, backend=backend, mode="fast")
-        recorder = Recorder()
-        undo = install(recorder)
-        started = time.perf_counter()
-        try:
-            packing = nd.pack(shape, args.count, backend=backend, mode="fast")
-        finally:
-            undo()
-        wall = time.perf_counter() - started
-        rounds = len(packing.stats.time)
-        print(f"== {backend}: {len(packing.radii)} spheres, {rounds} rounds, {wall:.2f} s "
-              "with every launch synchronised")
-        device = sum(entry[1] for entry in recorder.kernels.values())
-        print(f"   device kernels {device:.2f} s in {sum(e[0] for e in recorder.kernels.values())} launches")
-        print(f"   {'kernel':28s} {'calls':>6s} {'seconds':>8s} {'ms/call':>8s} {'threads':>10s} {'max':>8s}")
-        for name, (calls, seconds, threads, most) in sorted(recorder.kernels.items(), key=lambda item: -item[1][1]):
-            print(f"   {name:28s} {calls:6d} {seconds:8.3f} {1e3 * seconds / calls:8.3f} {threads:10d} {most:8d}")
-        print(f"   {'phase (inclusive)':28s} {'calls':>6s} {'seconds':>8s}")
-        for name, (calls, seconds) in sorted(recorder.phases.items(), key=lambda item: -item[1][1]):
-            print(f"   {name:28s} {calls:6d} {seconds:8.3f}")
-        results[backend] = dict(spheres=len(packing.radii), rounds=rounds, wall=wall, kernels=dict(recorder.kernels),
-                                phases=dict(recorder.phases))
+        launch_bound = backend.launch_bound
+        for variant in args.variants:
+            backend.launch_bound = launch_bound and VARIANTS[variant]
+            timed = []
+            for _ in range(args.repeats):
+                started = time.perf_counter()
+                nd.pack(shape, args.count, backend=backend, mode="fast")
+                timed.append(time.perf_counter() - started)
+            if args.host_profile and variant == "now":
+                profile = cProfile.Profile()
+                profile.enable()
+                nd.pack(shape, args.count, backend=backend, mode="fast")
+                profile.disable()
+                print(f"== {name}: host profile of one unprofiled run (tottime)")
+                pstats.Stats(profile).sort_stats("tottime").print_stats(25)
+                pstats.Stats(profile).sort_stats("cumtime").print_stats("ndpack", 30)
+            recorder = Recorder()
+            undo = install(recorder)
+            started = time.perf_counter()
+            try:
+                packing = nd.pack(shape, args.count, backend=backend, mode="fast")
+            finally:
+                undo()
+            wall = time.perf_counter() - started
+            key = name if args.variants == ["now"] else f"{name} {variant}"
+            results[key] = _report(key, packing, wall, recorder, timed)
+        backend.launch_bound = launch_bound
     if args.out:
         with open(args.out, "w") as file:
             json.dump(results, file, indent=1)

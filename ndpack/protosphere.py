@@ -33,7 +33,7 @@ from .backends.prototypes import best_starts
 from .errors import InvalidPackingError, ParameterError, RepairWarning, ShapeError
 from .oracle import Oracle, ball_volume, check_compatible, check_packable
 from .packing import Packing, RoundStats
-from .rounds import FAST_WINDOW, POLISH_WINDOW, SPLIT_RATIO, Fast, Faithful
+from .rounds import FAST_WINDOW, POLISH_AHEAD, POLISH_WINDOW, SPLIT_RATIO, Fast, Faithful
 from .shapes.adapters import as_oracle
 from .shapes.plugin import check_plugin_slopes
 from .verify import verify
@@ -428,8 +428,9 @@ def pack(
         polish_iterations=POLISH_ITERATIONS, polish_window=POLISH_WINDOW, safety_margin=SAFETY_MARGIN,
         fast_window=FAST_WINDOW, split_ratio=SPLIT_RATIO,
     )
+    polish_ahead = POLISH_AHEAD if backend.launch_bound and mode == "fast" else None
     if mode == "fast":
-        params.update(fast_eps_end=FAST_EPS_END, fast_polish_eps_end=FAST_POLISH_EPS_END)
+        params.update(fast_eps_end=FAST_EPS_END, fast_polish_eps_end=FAST_POLISH_EPS_END, polish_ahead=polish_ahead)
     started = time.perf_counter()
     steps, polish_steps = schedules(mode, int(iterations))
     state = RunState(shape, backend, counts, steps, polish_steps, int(restarts), np.random.default_rng(seed))
@@ -439,7 +440,7 @@ def pack(
             f"the volume of {shape!r} came out as {volume.value:g}: the shape is too thin for a "
             "Monte Carlo estimate over its bounds; tighten the bounds or give the shape an exact volume"
         )
-    strategy = Fast(state) if mode == "fast" else Faithful(int(batch))
+    strategy = Fast(state, polish_ahead=polish_ahead) if mode == "fast" else Faithful(int(batch))
     medial_axis, medial_radii = state.prototypes.all()
     stats = []  # (seconds, count, fill) after each round
     show = sys.stderr.isatty() if progress is None else progress

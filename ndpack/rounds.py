@@ -48,6 +48,13 @@ SMALL_ROUND_FIRST, SMALL_ROUND_SHARE = 64, 1 / 16
 #: Fast mode: rounds of polishing the chosen candidates before the choice is made among the
 #: polished ones only (:meth:`Fast.choose`).
 POLISH_PASSES = 2
+#: Fast mode on a launch-bound backend (a GPU, :attr:`~ndpack.backends.base.Backend.launch_bound`):
+#: after a round, every unpolished prototype above this fraction of its frontier is polished in one
+#: launch, so that the next round's window (which starts near ``(1 - FAST_WINDOW)**2`` of it) is
+#: mostly polished already and its choice needs no polish launch of its own. It polishes about
+#: 4.7x as many prototypes (bench/polish_origin.py): lanes a latency-bound launch leaves idle on a
+#: GPU, but work on a CPU, where it stays off.
+POLISH_AHEAD = (1 - FAST_WINDOW) ** 2
 #: Fast mode: at most this many candidates a round (bounds the host's conflict check).
 MAX_CANDIDATES = 1 << 16
 #: Fast mode stops splitting cells at this many prototypes (memory).
@@ -107,13 +114,16 @@ class Fast:
     disjoint from the larger ones, and cells split where their gaps have become small.
 
     Keeps, per cell, its longest side and an upper bound of its clearance (so that a round
-    looks only at cells that may split), and the last round's frontier.
+    looks only at cells that may split), and the last round's frontier. With ``polish_ahead``
+    (a fraction, see ``POLISH_AHEAD``) each round ends by polishing the unpolished prototypes
+    above that fraction of its frontier; None polishes only the candidates a choice keeps.
     """
 
     name = "fast"
 
-    def __init__(self, state, window: float = FAST_WINDOW, ratio: float = SPLIT_RATIO):
-        self.window, self.ratio = window, ratio
+    def __init__(self, state, window: float = FAST_WINDOW, ratio: float = SPLIT_RATIO,
+                 polish_ahead: float | None = None):
+        self.window, self.ratio, self.polish_ahead = window, ratio, polish_ahead
         store = state.prototypes
         self.frontier = np.inf  # the last round's largest clearance, late finds aside
         self.longest = (store.cell_upper - store.cell_lower).max(axis=1)
@@ -166,6 +176,10 @@ class Fast:
 
     def after_round(self, state, centers, radii, room):
         self.refine(state, SPLITS_PER_SPHERE * room, state.touched(centers, radii))
+        if self.polish_ahead is not None:  # after refine: its re-converged prototypes are included
+            ahead, _ = state.prototypes.select(low=self.polish_ahead * self.frontier, unpolished=True)
+            if len(ahead):
+                state.polish(ahead)
 
     def refine(self, state, most=None, touched=None):
         """Split in two, across their longest side, the cells longer than ``ratio`` times the

@@ -352,6 +352,43 @@ def test_small_fast_mode_on_the_device_store_equals_host_store(name):
     assert packing.verify().ok and abs(packing.fill / reference.fill - 1) < 0.005
 
 
+@pytest.mark.parametrize("name", [name for name in ("numba", *DEVICE_STORES) if not SIMULATED or name == "numba"])
+def test_fast_mode_polishing_ahead(name, monkeypatch):
+    """A launch-bound backend (a GPU) ends each fast round by polishing every unpolished
+    prototype above POLISH_AHEAD of the frontier: none is left after a round; the packing is
+    valid, its fill within 0.5% of polishing only the chosen; a device store gives the host
+    store's packing."""
+    from ndpack import rounds
+
+    shape = nd.Box([0.0, 0.0], [1.0, 1.0]) - nd.Ball([0.3, 0.4], 0.2)
+    left = []
+    after_round = rounds.Fast.after_round
+
+    def checked(self, state, centers, radii, room):
+        after_round(self, state, centers, radii, room)
+        left.append(len(state.prototypes.select(low=rounds.POLISH_AHEAD * self.frontier, unpolished=True)[0]))
+
+    monkeypatch.setattr(rounds.Fast, "after_round", checked)
+    backend = backends.get_backend(name)
+    saved = backend.launch_bound
+    try:
+        backend.launch_bound = True
+        packing = nd.pack(shape, 150, grid=8, mode="fast", backend=backend, on_invalid="raise")
+    finally:
+        backend.launch_bound = saved
+    assert packing.params["polish_ahead"] == rounds.POLISH_AHEAD and len(left) > 5 and max(left) == 0
+    plain = nd.pack(shape, 150, grid=8, mode="fast", backend="numba")
+    assert plain.params["polish_ahead"] is None and abs(packing.fill / plain.fill - 1) < 0.005
+    if name != "numba" and str(getattr(backend, "device", "cpu")) == "cpu":
+        host = backends.get_backend("numba")
+        try:
+            host.launch_bound = True
+            reference = nd.pack(shape, 150, grid=8, mode="fast", backend=host)
+        finally:
+            host.launch_bound = False
+        np.testing.assert_allclose(packing.radii, reference.radii, rtol=0, atol=1e-12)
+
+
 @pytest.mark.skipif(SIMULATED or _working("numba-cuda"), reason="runs only where there is no GPU")
 def test_numba_cuda_under_simulator():
     """The numba-cuda kernels, run by Numba's CUDA simulator in a fresh process (the switch

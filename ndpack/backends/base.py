@@ -25,6 +25,9 @@ class Backend:
     """Base class: the operations the ProtoSphere driver needs, on NumPy arrays in and out."""
 
     name = "base"
+    #: Whether a launch costs about as long as its slowest item, however many items it has (a GPU):
+    #: the fast mode then does work ahead in lanes a launch would leave idle (``rounds.POLISH_AHEAD``).
+    launch_bound = False
 
     def distance(self, shape, points) -> np.ndarray:
         """The shape's signed distance at ``points`` (n, d), evaluated by this backend: (n,) float64.

@@ -185,6 +185,7 @@ class NumbaCudaBackend(Backend):
             )
         self.cuda = cuda
         self.device = int(device)
+        self.launch_bound = not numba.config.ENABLE_CUDASIM  # the simulator runs a launch item by item
         cuda.select_device(self.device)
         self._namespaces = {}  # id(program) -> (program, namespace)
         self._params = weakref.WeakKeyDictionary()  # shape -> its numbers on the device
@@ -358,7 +359,9 @@ class _CudaDevice:
         for slot, (array, count) in enumerate(pairs):
             key = (slot, array.dtype, array.shape[1:])
             if key not in self._staging or len(self._staging[key]) < count:
-                self._staging[key] = self.cuda.pinned_array((max(count, 256), *array.shape[1:]), dtype=array.dtype)
+                # Twice the need: freeing pinned memory waits for the device (see the Warp adapter).
+                grown = 2 * len(self._staging[key]) if key in self._staging else 256
+                self._staging[key] = self.cuda.pinned_array((max(count, grown), *array.shape[1:]), dtype=array.dtype)
             buffer = self._staging[key]
             if count and self._device_to_host is not None:
                 self._device_to_host(buffer, array, buffer[:count].nbytes, stream=self.stream)

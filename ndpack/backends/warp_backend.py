@@ -60,6 +60,7 @@ class WarpBackend(Backend):
         if self.device.is_cpu and not wp.is_cpu_available():
             raise BackendError("Warp's CPU compiler is not available here; use device='cuda:0' or backend='numba'")
         self.wp = wp
+        self.launch_bound = self.device.is_cuda
         self.precision = precision
         self.margin = MARGIN[precision]
         self.float = np.float64 if precision == "float64" else np.float32
@@ -256,7 +257,10 @@ class _WarpDevice:
         for slot, (array, count) in enumerate(pairs):
             key = (slot, array.dtype)
             if key not in self._staging or self._staging[key].shape[0] < count:
-                self._staging[key] = wp.empty(max(count, 256), dtype=array.dtype, device="cpu", pinned=True)
+                # Twice the need: freeing pinned memory waits for the device (116 regrowths took
+                # 0.33 s of a 4.5 s packing on an H100 when each grew to the count alone).
+                grown = 2 * self._staging[key].shape[0] if key in self._staging else 256
+                self._staging[key] = wp.empty(max(count, grown), dtype=array.dtype, device="cpu", pinned=True)
             if count:  # pinned destination: the copies queue behind the kernels, one wait for all
                 wp.copy(self._staging[key], array, count=count)
             staged.append((self._staging[key], count, array))
