@@ -7,9 +7,11 @@ Every mistake in the input ends in one line on stderr and a non-zero exit: 2 for
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import re
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -27,7 +29,9 @@ PACK_EXAMPLES = """examples:
 
 SHAPE is a built-in name[:key=value,...], a mesh file (.obj .stl .ply .off .glb ...), a Python
 script (.py) that sets `shape`, or module:function. Built-in shapes: {shapes}.
-Ctrl-C stops the run and still writes what was packed to --output.
+Ctrl-C stops the run and still writes what was packed to --output. An output that cannot be
+written is refused before packing; a save that fails later (a full disk) keeps the packing as
+.npz beside it, in the current folder or in the temporary folder, and the error says where.
 
 output formats (by suffix, or --format):
 {formats}
@@ -60,9 +64,28 @@ INFO_EXAMPLES = """examples:
 
 def _numbers(text: str) -> tuple:
     try:
-        return tuple(float(x) for x in text.split(","))
+        values = tuple(float(x) for x in text.split(","))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+        values = (math.nan,)
+    if not all(math.isfinite(value) for value in values):
+        raise argparse.ArgumentTypeError(f"expected comma-separated finite numbers, got {text!r}")
+    return values
+
+
+def _seed(text: str) -> int:
+    if not text.strip().isdigit():
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return int(text)
+
+
+def _nonnegative(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    return value
 
 
 def _integers(text: str) -> tuple:
@@ -75,9 +98,12 @@ def _integers(text: str) -> tuple:
 def _size(text: str) -> tuple:
     width, x, height = text.lower().partition("x")
     try:
-        return int(width), int(height)
+        size = int(width), int(height)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT such as 900x900, got {text!r}") from None
+        size = (0, 0)
+    if min(size) < 1:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT in pixels such as 900x900, got {text!r}")
+    return size
 
 
 def _option(text: str) -> tuple:
@@ -119,7 +145,7 @@ def _parser() -> argparse.ArgumentParser:
     pack.add_argument("--mode", choices=("faithful", "fast"), default="faithful",
                       help="faithful: the paper's rounds (default); fast: many spheres a round and a "
                       "grid refined where gaps are small, for large counts")
-    pack.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    pack.add_argument("--seed", type=_seed, default=0, help="random seed, an integer >= 0 (default 0)")
     pack.add_argument("--backend", help="numpy, numba, numba-cuda or warp (default: $NDPACK_BACKEND or the fastest)")
     pack.add_argument("--device", help="cpu or cuda:N, for warp and numba-cuda")
     pack.add_argument("--on-invalid", choices=("repair", "raise"),
@@ -131,7 +157,7 @@ def _parser() -> argparse.ArgumentParser:
                                  epilog=VERIFY_EXAMPLES)
     verify.add_argument("packing", help="a packing file (.npz, .csv, .json, ...)")
     verify.add_argument("--shape", help="the shape to check against (default: the one the file records)")
-    verify.add_argument("--tol", type=float, help="overlap and containment tolerance (default: ndpack's)")
+    verify.add_argument("--tol", type=_nonnegative, help="overlap and containment tolerance, >= 0 (default: ndpack's)")
     verify.add_argument("--trust-source", action="store_true",
                         help="run the script or module the file records as its shape (only for files you trust)")
 
@@ -215,21 +241,40 @@ def _check_output(path: str, format: str | None, dim: int, options: dict) -> Non
     from .formats import check
 
     check(path, format, dim, **options)
+    _check_writable(path)
+
+
+def _check_writable(path: str) -> None:
+    """Refuse, before any work, an output whose folder is missing or cannot be written: a file
+    is made there and removed (permission bits do not tell for root or read-only mounts)."""
     folder = Path(path).expanduser().resolve().parent
     if not folder.is_dir():
         raise ParameterError(f"cannot write {path}: no folder {folder}")
+    try:
+        tempfile.TemporaryFile(dir=folder).close()
+    except OSError as error:
+        raise ParameterError(f"cannot write {path}: {error.strerror or error} in {folder}") from None
 
 
 def _save_or_keep(packing, path: str, format: str | None, options: dict) -> Path:
     """Save to ``path``; if that fails after all (a full disk, a bad option value), keep the
-    packing in ``path + ".npz"`` and still report the error, so a long run is never lost."""
+    packing as ``.npz`` beside it, else in the current folder, else in the temporary folder,
+    and still report the error, so a long run is never lost."""
     from .formats import save
 
     try:
         return save(packing, path, format, **options)
-    except NdpackError as error:
-        kept = save(packing, str(path) + ".npz")
-        raise NdpackError(f"{_one_line(error)}; the packing was kept in {kept}") from error
+    except (NdpackError, OSError) as error:
+        reason = _one_line(error) if isinstance(error, NdpackError) else f"cannot write {path}: {error.strerror}"
+        name = Path(path).name + ".npz"
+        for place in (str(path) + ".npz", Path.cwd() / name, Path(tempfile.gettempdir()) / name):
+            try:
+                kept = save(packing, place)
+            except (NdpackError, OSError):
+                continue
+            raise NdpackError(f"{reason}; the packing was kept in {kept}") from error
+        raise NdpackError(f"{reason}; and no folder could keep the packing (beside it, here, or the "
+                          f"temporary folder)") from error
 
 
 # ------------------------------------------------------------------------- saved packings
@@ -282,6 +327,7 @@ def _render(args) -> int:
 
     packing = _load(args.packing)
     output = args.output or str(Path(args.packing).with_suffix(".png"))
+    _check_writable(output)
     options = {}
     for name in ("size", "view", "axes", "at"):
         if getattr(args, name) is not None:
@@ -405,6 +451,10 @@ def main(argv=None) -> int:
     except BrokenPipeError:  # `ndpack info x.npz | head`: the reader left; say nothing more
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 141
+    except OSError as error:  # a file that cannot be read or written, in any command
+        where = f": {error.filename}" if error.filename else ""
+        print(f"ndpack: error: {error.strerror or _one_line(error)}{where}", file=sys.stderr)
+        return 2
 
 
 def _one_line(error) -> str:

@@ -274,6 +274,8 @@ def _reading(fmt: Format, path: Path, read: Callable):
         reason = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
         if isinstance(error, KeyError):
             reason = f"it has no {reason}"
+        elif "pickled" in reason:  # numpy's advice to unpickle it: ndpack never does
+            reason = "it is not an archive of arrays (NumPy would read it as pickled objects, which ndpack never loads)"
         raise NdpackError(f"{path} is not a readable ndpack packing ({fmt.name} format): {reason}") from error
 
 

@@ -117,7 +117,7 @@ def grid_counts(bounds: np.ndarray, grid=None) -> np.ndarray:
     return counts.astype(np.int64)
 
 
-def _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts):
+def _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts, seed=None):
     def positive_int(value, name):
         try:
             whole = not isinstance(value, bool) and float(value).is_integer() and value >= 1
@@ -137,6 +137,8 @@ def _check_parameters(n, min_radius, fill, time_budget, iterations, batch, resta
         raise ParameterError(f"fill (the target fill fraction) must lie in (0, 1), got {fill!r}")
     if time_budget is not None and not (time_budget > 0):
         raise ParameterError(f"time_budget must be a positive number of seconds, got {time_budget!r}")
+    if isinstance(seed, (bool, float)) or (isinstance(seed, (int, np.integer)) and seed < 0):
+        raise ParameterError(f"seed must be None, an integer >= 0 or a numpy Generator, got {seed!r}")
 
 
 @dataclass(frozen=True)
@@ -405,7 +407,7 @@ def pack(
     """
     shape = as_oracle(shape)
     check_compatible(shape)
-    _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts)
+    _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts, seed)
     on_invalid = _on_invalid(on_invalid)
     if mode not in ("faithful", "fast"):
         raise ParameterError(f"mode must be 'faithful' or 'fast', got {mode!r}")

@@ -289,3 +289,53 @@ def test_a_packing_file_never_runs_the_code_it_names(saved_square, tmp_path):
         assert not (tmp_path / marker).exists(), f"{source} ran"
         assert here("verify", str(crafted), "--trust-source").returncode == 0  # asked for: it runs
         assert (tmp_path / marker).exists()
+
+
+UNWRITABLE = next((folder for folder in ("/proc", "/sys") if os.path.isdir(folder)), None)
+
+
+@pytest.mark.skipif(UNWRITABLE is None, reason="no read-only folder to write into")
+def test_outputs_that_cannot_be_written_are_refused_before_any_work(saved_square):
+    started = time.perf_counter()
+    result = run("pack", "square", "-n", "50000", "-o", f"{UNWRITABLE}/x.npz")
+    one_line_error(result, "cannot write")
+    assert result.stdout == "" and time.perf_counter() - started < 60  # refused, not packed
+    one_line_error(run("render", str(saved_square), "-o", f"{UNWRITABLE}/x.png"), "cannot write")
+
+
+def test_a_save_that_fails_late_keeps_the_packing(tmp_path, monkeypatch, capsys):
+    """A disk that fills up after the check: the packing goes beside the output instead."""
+    import errno
+
+    from ndpack import cli, formats
+
+    wanted = tmp_path / "square.csv"
+    save = formats.save
+
+    def full_disk(packing, path, *args, **kwargs):
+        if str(path) == str(wanted):
+            raise OSError(errno.ENOSPC, "No space left on device", str(path))
+        return save(packing, path, *args, **kwargs)
+
+    monkeypatch.setattr(formats, "save", full_disk)
+    assert cli.main(["pack", "square", "-n", "20", "--backend", "numpy", "--grid", "8", "-q", "-o", str(wanted)]) == 2
+    line = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "No space left" in line and f"kept in {wanted}.npz" in line, line
+    assert len(nd.Packing.load(f"{wanted}.npz")) == 20
+
+
+def test_numeric_options_and_unreadable_files_give_one_line(saved_square, tmp_path):
+    for tol in ("-1", "nan", "inf", "x"):
+        result = run("verify", str(saved_square), "--tol", tol)
+        assert result.returncode == 2 and ">= 0" in result.stderr and "Traceback" not in result.stderr
+    for command, option, value, words in (("pack", "--seed", "-1", ">= 0"), ("render", "--size", "0x0", "pixels"),
+                                          ("render", "--at", "nan,0.5", "finite")):
+        target = ["square"] if command == "pack" else [str(saved_square), "-o", str(tmp_path / "x.svg")]
+        result = run(command, *target, option, value)
+        assert result.returncode == 2 and words in result.stderr and "Traceback" not in result.stderr, result.stderr
+    with pytest.raises(nd.NdpackError, match="seed must be"):
+        nd.pack(nd.Box([0, 0], [1, 1]), 3, seed=-1)
+    noise = tmp_path / "noise.npz"
+    noise.write_bytes(np.random.default_rng(0).bytes(2000))
+    line = one_line_error(run("info", str(noise)), "never loads")
+    assert "allow_pickle" not in line and "pickle.load" not in line
