@@ -200,6 +200,8 @@ class Fast:
         store, top = state.prototypes, self.frontier
         total = 0
         for _ in range(4 * state.dim):
+            if state.out_of_time():  # the run ends after this round: split no more
+                break
             low = (1 - self.window) * top
             ids = np.flatnonzero((self.longest > max(self.ratio * top, 1e3 * state.margin)) & (self.bound >= low))
             if len(ids) == 0:

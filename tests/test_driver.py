@@ -138,6 +138,30 @@ def test_stop_conditions():
     assert 0 < len(by_time) < 10**6 and by_time.verify().ok
 
 
+@pytest.mark.parametrize("mode", ["fast", "faithful"])
+def test_a_time_budget_holds_inside_long_rounds(mode, monkeypatch):
+    """Each prototype move made to last 2 ms: a fast round's refinement (hundreds of them) or a
+    faithful round's revivals would overrun a 1.5 s budget by seconds if time were checked only
+    between rounds; the packing stops within a few pieces of the budget, and is what it made."""
+    import time
+
+    from ndpack.backends.prototypes import HostPrototypes
+
+    move = HostPrototypes.move
+
+    def slow(self, ids, *args, **kwargs):
+        time.sleep(2e-3 * len(ids))
+        return move(self, ids, *args, **kwargs)
+
+    monkeypatch.setattr(HostPrototypes, "move", slow)
+    started = time.perf_counter()
+    packing = nd.pack(nd.Box([0, 0, 0], [1, 1, 1]), n=10**6, grid=12, mode=mode, time_budget=1.5, backend="numba")
+    packed = time.perf_counter() - started - (packing.stats.time[-1] if len(packing.stats.time) else 0)
+    assert packing.stop_reason == "time" and len(packing) > 0
+    assert packing.stats.time[-1] < 1.5 * 1.3, packing.stats.time[-1]  # the last round ended near the budget
+    assert packed < 5.0  # what follows the last round: the float64 check, not more packing
+
+
 def test_medial_axis_of_a_rectangle():
     rectangle = nd.Box([0, 0], [2, 1])
     packing = nd.pack(rectangle, n=1, grid=40, seed=0)
