@@ -265,7 +265,8 @@ def _save_or_keep(packing, path: str, format: str | None, options: dict) -> Path
     try:
         return save(packing, path, format, **options)
     except (NdpackError, OSError) as error:
-        reason = _one_line(error) if isinstance(error, NdpackError) else f"cannot write {path}: {error.strerror}"
+        reason = (_one_line(error) if isinstance(error, NdpackError)
+                  else f"cannot write {path}: {error.strerror or _one_line(error)}")
         name = Path(path).name + ".npz"
         for place in (str(path) + ".npz", Path.cwd() / name, Path(tempfile.gettempdir()) / name):
             try:
