@@ -21,13 +21,13 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
-import time
 
 import numpy as np
 
 import ndpack as nd
 from ndpack import protosphere
 from ndpack.backends import get_backend
+from profile_kernels import Recorder, install  # bench/, beside this script
 
 
 def _capture(shape, backend, count):
@@ -49,26 +49,17 @@ def _capture(shape, backend, count):
 
 
 def _timed_move(store, ids, centers, radii, steps, repeats):
-    """Median seconds of the move_ids launch alone (the neighbour table is built first)."""
-    device = store.device
-    launch = type(device).launch
+    """Median seconds of the move_ids launch alone, timed as bench/profile_kernels.py times
+    every launch (the neighbour table's launches apart)."""
     times = []
-
-    def timed(self, name, threads, *args):
-        if name != "move_ids":
-            return launch(self, name, threads, *args)
-        self.synchronize()
-        started = time.perf_counter()
-        launch(self, name, threads, *args)
-        self.synchronize()
-        times.append(time.perf_counter() - started)
-
-    type(device).launch = timed
-    try:
-        for _ in range(repeats):
+    for _ in range(repeats):
+        recorder = Recorder()
+        undo = install(recorder)
+        try:
             store.move(ids, centers, radii, steps, polish=True)
-    finally:
-        type(device).launch = launch
+        finally:
+            undo()
+        times.append(recorder.kernels["move_ids[polish]"][1])
     return statistics.median(times)
 
 

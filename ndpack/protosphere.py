@@ -63,8 +63,9 @@ REVIVE_TRIES, REVIVE_CHUNK = 32, 2048
 #: launches on a GPU, bounded memory for any grid.
 START_FLOATS = 1 << 23
 #: Under a time budget, prototypes move in pieces that take about this share of the budget (from
-#: the rate measured so far), so that a long refinement stops within a few percent of it; the
-#: first piece, before any rate is known, is ``FIRST_PIECE`` prototypes.
+#: the rate measured so far), so that a long refinement stops within a few percent of it (2 cores:
+#: a 6-D CSG shape's last round ended at 4.03 s of a 4 s budget and 10.04 of 10; moves slowed to
+#: 2 ms each at 1.51 of 1.5 s); the first piece, before any rate is known, is ``FIRST_PIECE``.
 PIECE_SHARE, FIRST_PIECE = 0.01, 256
 #: Radii are shrunk by this fraction of the shape's scale, so that float64 rounding in the
 #: distances (about 1e-16 of the scale) can never make touching spheres overlap or poke out.
@@ -294,12 +295,12 @@ class RunState:
         pieces sized to a small share of the budget, none begun once it has passed (the run ends
         after this round, so prototypes left unmoved are never chosen). Each prototype's move is
         independent of the others', so the pieces change no result, only when it stops."""
-        if self.deadline is None:
-            self.prototypes.move(ids, *self.spheres, self.steps, starts=starts)
-            return
         done = 0
         while done < len(ids) and not self.out_of_time():
-            size = FIRST_PIECE if self._seconds_each is None else PIECE_SHARE * self.budget / self._seconds_each
+            if self.deadline is None:
+                size = len(ids)
+            else:
+                size = FIRST_PIECE if self._seconds_each is None else PIECE_SHARE * self.budget / self._seconds_each
             piece = slice(done, done + max(1, int(size)))
             started = time.perf_counter()
             part = None if starts is None else starts[:, piece]
@@ -482,8 +483,8 @@ def pack(
     show = sys.stderr.isatty() if progress is None else progress
     bar = tqdm(total=int(n), unit="sphere", disable=not show, dynamic_ncols=True)
     try:
-        stop_reason = _run_rounds(state, strategy, int(n), float(min_radius), fill, time_budget, volume.value,
-                                  started, stats, bar, on_round)
+        stop_reason = _run_rounds(state, strategy, int(n), float(min_radius), fill, volume.value, started, stats,
+                                  bar, on_round)
     except KeyboardInterrupt:
         stop_reason = "interrupted"
     finally:
@@ -534,7 +535,7 @@ class Round:
     state: RunState
 
 
-def _run_rounds(state, strategy, n, min_radius, fill, time_budget, volume, started, stats, bar, on_round):
+def _run_rounds(state, strategy, n, min_radius, fill, volume, started, stats, bar, on_round):
     """The rounds of one run, until a limit; returns why it stopped. Appends each round's
     (seconds, count, fill) to ``stats``, whole, so that an interrupt leaves whole rows."""
     covered = 0.0
@@ -543,7 +544,7 @@ def _run_rounds(state, strategy, n, min_radius, fill, time_budget, volume, start
             return "count"
         if fill is not None and covered / volume >= fill:
             return "fill"
-        if time_budget is not None and time.perf_counter() - started >= time_budget:
+        if state.out_of_time():
             return "time"
         centers, radii = strategy.choose(state, min_radius, n - state.count)
         if len(radii) == 0 and state.revive():

@@ -37,28 +37,44 @@ def load_shape(source: str):
     -------
     Oracle
     """
-    from .builtin import from_spec, registered
+    from .builtin import from_spec
     from .shapes.adapters import as_oracle
 
     text = source.strip()
     if not text:
         raise ShapeError("the shape is empty: name a built-in shape (e.g. box:dim=3), a mesh file or a script")
+    kind = _kind(text)
     path = Path(text).expanduser()
-    suffix = path.suffix.lower()
     if path.is_dir():
         raise ShapeError(f"{text} is a folder, not a mesh file or a script")
-    if suffix == ".py" or suffix in MESH_SUFFIXES or path.is_file() or "/" in text or os.sep in text:
-        if not path.exists():
-            raise ShapeError(f"no such file: {text}")
-        if suffix == ".py":
-            return _checked(as_oracle(_from_script(path)), text)
+    if kind in ("script", "mesh") and not path.exists():
+        raise ShapeError(f"no such file: {text}")
+    if kind == "script":
+        return _checked(as_oracle(_from_script(path)), text)
+    if kind == "mesh":
         from .shapes.mesh import TriangleMesh
 
         return TriangleMesh.load(path)
+    if kind == "spec":
+        return from_spec(text)
+    name, _, attribute = text.partition(":")
+    return _checked(as_oracle(_from_plugin(name.strip(), attribute.strip())), text)
+
+
+def _kind(text: str) -> str:
+    """How :func:`load_shape` reads a stripped source: ``"script"``, ``"mesh"`` (any other
+    file), ``"spec"`` (a named shape) or ``"plugin"`` (``module:attribute``)."""
+    from .builtin import registered
+
+    path = Path(text).expanduser()
+    if path.suffix.lower() == ".py":
+        return "script"
+    if path.suffix.lower() in MESH_SUFFIXES or path.is_file() or "/" in text or os.sep in text:
+        return "mesh"
     name, colon, rest = text.partition(":")
     if name.strip().lower() in registered() or not colon or "=" in rest:
-        return from_spec(text)
-    return _checked(as_oracle(_from_plugin(name.strip(), rest.strip())), text)
+        return "spec"
+    return "plugin"
 
 
 def _from_script(path: Path):
@@ -125,23 +141,20 @@ def _checked(shape, source: str):
 
 def code_in(source: str) -> str | None:
     """What code :func:`load_shape` would run for ``source``, in words, or None where it only
-    reads data (a mesh file, a built-in shape spec). Decided from the text alone, the same way
-    :func:`load_shape` decides, without touching the file system beyond ``is_file``."""
+    reads data (a mesh file, a built-in shape spec): the same reading (:func:`_kind`), without
+    touching the file system beyond ``is_file``."""
     from .builtin import BUILTIN
 
     text = source.strip()
-    path = Path(text).expanduser()
-    suffix = path.suffix.lower()
-    if suffix == ".py":
+    kind = _kind(text)
+    name = text.partition(":")[0].strip()
+    if kind == "script":
         return f"the Python script {text}"
-    if suffix in MESH_SUFFIXES or path.is_file() or "/" in text or os.sep in text:
-        return None  # a mesh file: trimesh reads it as data
-    name, colon, rest = text.partition(":")
-    if name.strip().lower() in BUILTIN:
-        return None
-    if not colon or "=" in rest:
-        return f"the shape plug-in of an installed package ({name.strip()!r})"
-    return f"the module {name.strip()!r}"
+    if kind == "mesh" or (kind == "spec" and name.lower() in BUILTIN):
+        return None  # trimesh reads a mesh file as data; a built-in shape is ndpack's own
+    if kind == "spec":
+        return f"the shape plug-in of an installed package ({name!r})"
+    return f"the module {name!r}"
 
 
 def describe(source: str) -> str:
