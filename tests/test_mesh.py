@@ -196,6 +196,15 @@ def test_bad_arrays_say_what_is_wrong():
         nd.TriangleMesh(np.where(tetra == 1, np.nan, tetra), [[0, 1, 2]])
 
 
+def test_a_file_with_a_nan_vertex_is_refused(tmp_path):
+    # trimesh's processing drops such a vertex's triangles: the file loaded as a mesh with holes.
+    tetra = ["v 0 0 0", "v 1 0 0", "v 0 1 0", "v 0 0 nan", "f 1 3 2", "f 1 2 4", "f 2 3 4", "f 3 1 4"]
+    path = tmp_path / "nan.obj"
+    path.write_text("\n".join(tetra) + "\n")
+    with pytest.raises(ShapeError, match="nan.obj' has 1 vertex with non-finite"):
+        nd.TriangleMesh.load(path)
+
+
 # ---------------------------------------------------------------------- packings
 @pytest.mark.parametrize("name", ["armadillo-20k", "cow", "fandisk", "rocker-arm"])
 def test_packing_is_inside_by_libigl(name):

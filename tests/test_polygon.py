@@ -252,6 +252,19 @@ def test_repr_counts_vertices():
 
 
 # ---------------------------------------------------------------------- bad input
+@pytest.mark.parametrize("scale", [1e-9, 1.0, 1e9])
+def test_the_crossing_check_is_scale_free(scale):
+    # manifold3d, which computes the even-odd area, rounds coordinates at a fixed precision.
+    polygon = Polygon(np.array(SQUARE) * scale + 3 * scale, [np.array(SQUARE_HOLE) * scale + 3 * scale])
+    assert polygon.volume().value == pytest.approx(3.0 * scale**2, rel=1e-12)
+    with pytest.raises(ShapeError, match="cross themselves"):
+        Polygon(np.array([[0, 0], [2, 2], [2, 0], [0, 1]]) * scale)
+    # A simple sliver is not refused for manifold3d's rounding of its thin side.
+    for thickness in (1e-3, 1e-7):
+        sliver = Polygon(np.array([[0, 0], [1, 0], [1, thickness], [0, thickness]]) * scale)
+        assert sliver.volume().value == pytest.approx(thickness * scale**2, rel=1e-6)
+
+
 @pytest.mark.parametrize(
     "outer, holes, message",
     [
@@ -269,6 +282,12 @@ def test_repr_counts_vertices():
         (SQUARE, [[[0.5, 0.5], [1, 1], [1.5, 1.5]]], "hole 0 has zero area"),
         (SQUARE, np.array(SQUARE_HOLE), r"holes=\[hole\]"),
         (SQUARE, [[0.5, 0.5], [1.5, 0.5], [1, 1]], r"holes=\[hole\]"),
+        # A self-crossing ring: its signed area (1) is not the region's (5/3, even-odd), which
+        # packed to a fill of 1.5 before.
+        ([[0, 0], [2, 2], [2, 0], [0, 1]], (), "cross themselves.*1.66667"),
+        # Two holes that overlap: the even-odd region is not the square less both holes.
+        (SQUARE, [[[0.2, 0.2], [1, 0.2], [1, 1], [0.2, 1]], [[0.6, 0.6], [1.4, 0.6], [1.4, 1.4], [0.6, 1.4]]],
+         "cross themselves or each other"),
     ],
 )
 def test_bad_input_raises_shape_error(outer, holes, message):

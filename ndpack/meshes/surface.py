@@ -53,7 +53,9 @@ def read(path) -> "trimesh.Trimesh":  # noqa: F821
     if os.path.getsize(path) == 0:
         raise ShapeError(f"the mesh file {path!r} is empty (0 bytes)")
     try:
-        loaded = trimesh.load(path, force="mesh")
+        # Unprocessed first: trimesh's processing drops the triangles of a NaN vertex silently,
+        # which would turn a broken file into a mesh with holes. Processed below, as load would.
+        loaded = trimesh.load(path, force="mesh", process=False)
     except Exception as error:  # trimesh raises many kinds for unreadable files
         raise ShapeError(
             f"trimesh cannot read {path!r} as a triangle mesh ({type(error).__name__}: {error}); "
@@ -63,6 +65,11 @@ def read(path) -> "trimesh.Trimesh":  # noqa: F821
         kind = type(loaded).__name__
         hint = " (a 2-D drawing: pack it with ndpack.Polygon)" if "Path2D" in kind else ""
         raise ShapeError(f"{path!r} holds a {kind}, not a triangle mesh{hint}")
+    broken = int(np.count_nonzero(~np.isfinite(loaded.vertices).all(axis=1)))
+    if broken:
+        raise ShapeError(f"the mesh file {path!r} has {broken} {'vertex' if broken == 1 else 'vertices'} with non-finite "
+                         "coordinates (NaN or infinity): repair or remove them in the file")
+    loaded.process()
     if len(loaded.faces) == 0:
         raise ShapeError(f"the mesh file {path!r} has no triangles ({len(loaded.vertices)} vertices)")
     return loaded

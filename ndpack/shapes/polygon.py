@@ -50,6 +50,33 @@ def _signed_area(ring: np.ndarray) -> float:
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 
+#: Largest difference between a polygon's area from its rings and its even-odd area for simple
+#: rings: this fraction of the area, plus the perimeter times this fraction of the outline's size
+#: (manifold3d rounds coordinates: a 1 by 1e-7 sliver measured 4e-9 off in unit size).
+AREA_AGREEMENT, COORDINATE_ROUNDING = 1e-6, 1e-7
+
+
+def _check_simple(rings: list, area: float) -> None:
+    """Refuse rings whose region is not what their areas say: a ring that crosses itself, holes
+    that overlap (the distance and the packing follow the even-odd rule, the area would not)."""
+    import manifold3d
+
+    # In units of the outline's size: manifold3d rounds coordinates to a fixed precision.
+    points = np.concatenate(rings)
+    center = 0.5 * (points.min(axis=0) + points.max(axis=0))
+    size = float(np.ptp(points, axis=0).max())
+    unit = [np.ascontiguousarray((ring - center) / size) for ring in rings]
+    even_odd = manifold3d.CrossSection(unit, manifold3d.FillRule.EvenOdd).area() * size**2
+    perimeter = sum(float(np.linalg.norm(np.roll(ring, -1, axis=0) - ring, axis=1).sum()) for ring in rings)
+    if abs(even_odd - area) > AREA_AGREEMENT * max(abs(area), even_odd) + COORDINATE_ROUNDING * size * perimeter:
+        raise ShapeError(
+            f"the rings cross themselves or each other: their areas add up to {area:.6g} but the region "
+            f"they bound (even-odd rule) has area {even_odd:.6g}; split a self-crossing ring into simple "
+            "rings, or build the outline as a manifold3d.CrossSection (its fill rule says which parts are "
+            "inside), which ndpack packs as simple rings"
+        )
+
+
 def _ring_area(ring: np.ndarray, what: str) -> float:
     """The signed area of a ring, or a :class:`ShapeError` naming it when it has none."""
     area = _signed_area(ring)
@@ -148,7 +175,9 @@ class Polygon(Oracle):
                     "outside"
                 )
 
-        self._setup([self.outer, *self.holes], abs(areas[0]) - sum(abs(a) for a in areas[1:]))
+        area = abs(areas[0]) - sum(abs(a) for a in areas[1:])
+        _check_simple([self.outer, *self.holes], area)
+        self._setup([self.outer, *self.holes], area)
 
     def _setup(self, rings, area: float):
         """Edge arrays of oriented ``rings`` (region on the left of every edge) and the area."""
@@ -200,7 +229,9 @@ class Polygon(Oracle):
         largest = int(np.argmax(np.where(hole, -np.inf, np.abs(areas))))
         polygon.outer = oriented[largest]
         polygon.holes = tuple(ring for i, ring in enumerate(oriented) if i != largest)
-        polygon._setup([polygon.outer, *polygon.holes], float(np.sum(np.where(hole, -1, 1) * np.abs(areas))))
+        area = float(np.sum(np.where(hole, -1, 1) * np.abs(areas)))
+        _check_simple(oriented, area)
+        polygon._setup([polygon.outer, *polygon.holes], area)
         return polygon
 
     @classmethod
