@@ -166,6 +166,14 @@ def tightened_reach(box_lower, box_upper, reach, centers, radii, table) -> np.nd
     return np.minimum(reach, gaps.min(axis=1, initial=np.inf) + half)
 
 
+def staging_rows(current: int, need: int) -> int:
+    """Rows of a pinned host buffer that must hold ``need`` rows and holds ``current`` (0: none
+    yet): at least twice ``current`` (256 at first), because freeing pinned memory waits for the
+    device (116 regrowths took 0.33 s of a 4.5 s packing on an H100 when each grew to the need
+    alone)."""
+    return max(need, 2 * current if current else 256)
+
+
 def no_wall(count: int) -> np.ndarray:
     """(count,) walls that never spare a distance evaluation (see :meth:`Backend.converge`)."""
     return np.full(count, -np.inf)

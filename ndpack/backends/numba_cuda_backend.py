@@ -18,7 +18,7 @@ import weakref
 import numpy as np
 
 from ..errors import BackendError
-from .base import Backend, compiled_program, no_wall, tightened_reach
+from .base import Backend, compiled_program, no_wall, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
 from .numba_backend import FD_STEP, KERNELS
 
@@ -359,9 +359,8 @@ class _CudaDevice:
         for slot, (array, count) in enumerate(pairs):
             key = (slot, array.dtype, array.shape[1:])
             if key not in self._staging or len(self._staging[key]) < count:
-                # Twice the need: freeing pinned memory waits for the device (see the Warp adapter).
-                grown = 2 * len(self._staging[key]) if key in self._staging else 256
-                self._staging[key] = self.cuda.pinned_array((max(count, grown), *array.shape[1:]), dtype=array.dtype)
+                rows = staging_rows(len(self._staging[key]) if key in self._staging else 0, count)
+                self._staging[key] = self.cuda.pinned_array((rows, *array.shape[1:]), dtype=array.dtype)
             buffer = self._staging[key]
             if count and self._device_to_host is not None:
                 self._device_to_host(buffer, array, buffer[:count].nbytes, stream=self.stream)

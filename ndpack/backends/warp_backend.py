@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import BackendError
-from .base import Backend, compiled_program, no_wall, tightened_reach
+from .base import Backend, compiled_program, no_wall, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
 
 KERNELS = Path(__file__).with_name("warp_kernels.py").read_text()
@@ -257,10 +257,8 @@ class _WarpDevice:
         for slot, (array, count) in enumerate(pairs):
             key = (slot, array.dtype)
             if key not in self._staging or self._staging[key].shape[0] < count:
-                # Twice the need: freeing pinned memory waits for the device (116 regrowths took
-                # 0.33 s of a 4.5 s packing on an H100 when each grew to the count alone).
-                grown = 2 * self._staging[key].shape[0] if key in self._staging else 256
-                self._staging[key] = wp.empty(max(count, grown), dtype=array.dtype, device="cpu", pinned=True)
+                rows = staging_rows(self._staging[key].shape[0] if key in self._staging else 0, count)
+                self._staging[key] = wp.empty(rows, dtype=array.dtype, device="cpu", pinned=True)
             if count:  # pinned destination: the copies queue behind the kernels, one wait for all
                 wp.copy(self._staging[key], array, count=count)
             staged.append((self._staging[key], count, array))

@@ -56,7 +56,7 @@ def _signed_area(ring: np.ndarray) -> float:
 AREA_AGREEMENT, COORDINATE_ROUNDING = 1e-6, 1e-7
 
 
-def _check_simple(rings: list, area: float) -> None:
+def _check_simple(rings: list, area: float, perimeter: float) -> None:
     """Refuse rings whose region is not what their areas say: a ring that crosses itself, holes
     that overlap (the distance and the packing follow the even-odd rule, the area would not)."""
     import manifold3d
@@ -67,7 +67,6 @@ def _check_simple(rings: list, area: float) -> None:
     size = float(np.ptp(points, axis=0).max())
     unit = [np.ascontiguousarray((ring - center) / size) for ring in rings]
     even_odd = manifold3d.CrossSection(unit, manifold3d.FillRule.EvenOdd).area() * size**2
-    perimeter = sum(float(np.linalg.norm(np.roll(ring, -1, axis=0) - ring, axis=1).sum()) for ring in rings)
     if abs(even_odd - area) > AREA_AGREEMENT * max(abs(area), even_odd) + COORDINATE_ROUNDING * size * perimeter:
         raise ShapeError(
             f"the rings cross themselves or each other: their areas add up to {area:.6g} but the region "
@@ -175,12 +174,11 @@ class Polygon(Oracle):
                     "outside"
                 )
 
-        area = abs(areas[0]) - sum(abs(a) for a in areas[1:])
-        _check_simple([self.outer, *self.holes], area)
-        self._setup([self.outer, *self.holes], area)
+        self._setup([self.outer, *self.holes], abs(areas[0]) - sum(abs(a) for a in areas[1:]))
 
     def _setup(self, rings, area: float):
-        """Edge arrays of oriented ``rings`` (region on the left of every edge) and the area."""
+        """Edge arrays of oriented ``rings`` (region on the left of every edge) and the area; a
+        :class:`ShapeError` where the rings cross (:func:`_check_simple`)."""
         self._area = area
         self._rings = tuple(rings)
         self._start = np.ascontiguousarray(np.concatenate(rings))
@@ -189,6 +187,7 @@ class Polygon(Oracle):
         edge = self._end - self._start
         self._edge = edge
         self._inv_length2 = 1.0 / np.einsum("ij,ij->i", edge, edge)
+        _check_simple(rings, area, float(np.sqrt(1.0 / self._inv_length2).sum()))
         self._normal = edge[:, ::-1] * np.array([1.0, -1.0]) * np.sqrt(self._inv_length2)[:, None]
         self._bounds = np.array([self._start.min(axis=0), self._start.max(axis=0)])
         for ring in rings:  # the edges were computed from them: changing them would do nothing
@@ -229,9 +228,7 @@ class Polygon(Oracle):
         largest = int(np.argmax(np.where(hole, -np.inf, np.abs(areas))))
         polygon.outer = oriented[largest]
         polygon.holes = tuple(ring for i, ring in enumerate(oriented) if i != largest)
-        area = float(np.sum(np.where(hole, -1, 1) * np.abs(areas)))
-        _check_simple(oriented, area)
-        polygon._setup([polygon.outer, *polygon.holes], area)
+        polygon._setup([polygon.outer, *polygon.holes], float(np.sum(np.where(hole, -1, 1) * np.abs(areas))))
         return polygon
 
     @classmethod
