@@ -13,6 +13,8 @@
 #       (bench/profile_kernels.py), on both GPU backends
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh million   1,000,000 spheres in the armadillo and
 #       the unit cube on Warp, before and now (bench/scale.py)
+#   source .gpu2/setup.sh && bash bench/gpu_issue20.sh spread    threads per moved prototype: a launch's
+#       move_ids alone (bench/step_cost.py) and whole packings with and without (bench/profile_kernels.py)
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh tests     the GPU backends' tests
 set -uo pipefail
 source bench/gpu_header.sh
@@ -39,8 +41,15 @@ case "${1:-time}" in
         --mesh /tmp/armadillo.obj --counts 1000000 --faithful-count 0 --box-count 1000000 \
         --out "$OUT/scale_million_h100_warp_$version.json" 2>&1 | grep -v "^Warp\|^Module" | tee "$OUT/million_$version.txt"
     done ;;
+  spread)  # the seventh steps: threads per moved prototype (step_cost's spread rows, profile_kernels' spread-1)
+    timeout 250 python3 bench/step_cost.py --backends warp numba-cuda --mesh /tmp/armadillo.obj --count 100000 \
+      --out "$OUT/step_cost_spread_h100.json" 2>&1 | grep -v "^Warp\|^Module" | tee "$OUT/step_cost_spread.txt"
+    timeout 300 python3 bench/profile_kernels.py --backends warp numba-cuda --mesh /tmp/armadillo.obj --count 100000 \
+      --variants now spread-1 threads-2^15 threads-2^16 threads-2^18 threads-2^19 --repeats 2 \
+      --out "$OUT/profile_spread_h100.json" 2>&1 | grep -v "^Warp\|^Module" \
+      | tee "$OUT/profile_spread.txt" ;;
   tests)
     timeout 570 python3 -m pytest -q -p no:cacheprovider tests/test_backends.py tests/test_scale.py tests/test_driver.py \
       -k "numba-cuda or warp or cuda or fast" 2>&1 | tail -15 | tee "$OUT/tests.txt" ;;
-  *) echo "unknown part $1: time, profile, million or tests" >&2; exit 2 ;;
+  *) echo "unknown part $1: time, profile, million, spread or tests" >&2; exit 2 ;;
 esac

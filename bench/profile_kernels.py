@@ -10,7 +10,10 @@ The driver's phases are timed inclusively
 slows the run down: the total is not the unprofiled time. Compiles first (a 3-sphere packing).
 
 ``--variants`` compares, in one process, the code as it is (``now``) with a policy turned off:
-``no-ahead`` does not polish ahead (``rounds.POLISH_AHEAD``, the backend's ``launch_bound``).
+``no-ahead`` does not polish ahead (``rounds.POLISH_AHEAD``, the backend's ``launch_bound``);
+``spread-1`` moves each prototype on one thread of a launch, however few it moves (the
+backend's ``move_spread``, see :func:`ndpack.backends.prototypes.lane_spread`); ``threads-2^k``
+spreads a move launch over at most 2^k threads (``prototypes.SPREAD_THREADS``).
 Each variant is also timed unprofiled ``--repeats`` times (median). ``--host-profile`` prints
 the host's cProfile of one unprofiled ``now`` run (by own time, then ndpack's functions by
 inclusive time): where the host works and waits.
@@ -31,10 +34,12 @@ import numpy as np
 
 import ndpack as nd
 from ndpack import protosphere, rounds
-from ndpack.backends import get_backend
+from ndpack.backends import get_backend, prototypes
 
-#: Whether each variant polishes ahead.
-VARIANTS = {"now": True, "no-ahead": False}
+#: The backend attributes each variant sets.
+VARIANTS = {"now": {}, "no-ahead": {"launch_bound": False}, "spread-1": {"move_spread": 1}}
+#: Variants that set ``prototypes.SPREAD_THREADS`` instead: a move launch's most threads.
+THREAD_VARIANTS = {f"threads-2^{bits}": 1 << bits for bits in (15, 16, 18, 19, 20)}
 
 #: Driver phases timed inclusively: (owner, attribute name).
 PHASES = [
@@ -133,7 +138,7 @@ def main():
     parser.add_argument("--backends", nargs="+", default=["warp"])
     parser.add_argument("--count", type=int, default=100_000)
     parser.add_argument("--mesh", default=None, help="a mesh file; default the unit cube")
-    parser.add_argument("--variants", nargs="+", default=["now"], choices=list(VARIANTS))
+    parser.add_argument("--variants", nargs="+", default=["now"], choices=[*VARIANTS, *THREAD_VARIANTS])
     parser.add_argument("--repeats", type=int, default=0, help="unprofiled runs per variant (median)")
     parser.add_argument("--host-profile", action="store_true", help="cProfile one unprofiled run of `now`")
     parser.add_argument("--out", default=None, help="write the tables as JSON here")
@@ -143,9 +148,13 @@ def main():
     for name in args.backends:
         backend = get_backend(name)
         nd.pack(shape, 3, backend=backend, mode="fast")
-        launch_bound = backend.launch_bound
+        spread_threads = prototypes.SPREAD_THREADS
+        defaults = {key: getattr(backend, key) for variant in VARIANTS.values() for key in variant
+                    if hasattr(backend, key)}
         for variant in args.variants:
-            backend.launch_bound = launch_bound and VARIANTS[variant]
+            for key, value in defaults.items():
+                setattr(backend, key, VARIANTS.get(variant, {}).get(key, value))
+            prototypes.SPREAD_THREADS = THREAD_VARIANTS.get(variant, spread_threads)
             timed = []
             for _ in range(args.repeats):
                 started = time.perf_counter()
@@ -169,7 +178,9 @@ def main():
             wall = time.perf_counter() - started
             key = name if args.variants == ["now"] else f"{name} {variant}"
             results[key] = _report(key, packing, wall, recorder, timed)
-        backend.launch_bound = launch_bound
+        for key, value in defaults.items():
+            setattr(backend, key, value)
+        prototypes.SPREAD_THREADS = spread_threads
     if args.out:
         with open(args.out, "w") as file:
             json.dump(results, file, indent=1)

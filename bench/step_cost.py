@@ -11,7 +11,11 @@ spheres, then launches the same prototypes again (``move_ids`` alone, synchronis
 - no spheres (one far away stands in): the step's shape query alone (without ``--mesh``, the
   unit cube: an analytic shape, whose query is a few operations);
 - the prototypes repeated 4 and 16 times in one launch: the same time means the launch is
-  bound by latency (its slowest lane), not by the device's throughput.
+  bound by latency (its slowest lane), not by the device's throughput;
+- 1, 2, 4, 8 and 32 threads per prototype (the first moves it, the rest idle: its warp's other lanes
+  wait for no divergent walk), for all the prototypes and for 1,500 of them (a round's choice
+  polishes about as many); the other rows use the backend's own spread
+  (:func:`ndpack.backends.prototypes.lane_spread`).
 
 Each launch moves prototypes of a finished packing, so the packing is discarded.
 """
@@ -26,6 +30,7 @@ import numpy as np
 
 import ndpack as nd
 from ndpack import protosphere
+from ndpack.backends import prototypes
 from ndpack.backends import get_backend
 from profile_kernels import Recorder, install  # bench/, beside this script
 
@@ -48,10 +53,31 @@ def _capture(shape, backend, count):
     return seen["state"], seen["ids"]
 
 
+def _snapshot(store):
+    """A function that puts the device store's prototypes (points, clearances, polish flags,
+    reach) back as they are now: every timed launch starts from the same state. (Before the
+    seventh steps each launch started from the last one's result, and the launch without spheres
+    moved every prototype away from them for the rows after it.)"""
+    device, count = store.device, len(store)
+    points, clearance, polished, reach = device.fetch((store.d_points, count), (store.d_clearance, count),
+                                                      (store.d_polished, count), (store.d_reach, count))
+    host_reach = store.reach.copy()
+
+    def restore():
+        device.write(store.d_points, 0, points, "point")
+        device.write(store.d_clearance, 0, clearance, "float")
+        device.write(store.d_polished, 0, polished, "index")
+        device.write(store.d_reach, 0, reach, "float")
+        store.reach[:] = host_reach
+        device.synchronize()
+    return restore
+
+
 def _timed_move(store, ids, centers, radii, steps, repeats):
     """Median seconds of the move_ids launch alone, timed as bench/profile_kernels.py times
-    every launch (the neighbour table's launches apart)."""
+    every launch (the neighbour table's launches apart), each from the same state."""
     times = []
+    restore = _snapshot(store)
     for _ in range(repeats):
         recorder = Recorder()
         undo = install(recorder)
@@ -59,6 +85,7 @@ def _timed_move(store, ids, centers, radii, steps, repeats):
             store.move(ids, centers, radii, steps, polish=True)
         finally:
             undo()
+            restore()
         times.append(recorder.kernels["move_ids[polish]"][1])
     return statistics.median(times)
 
@@ -76,6 +103,17 @@ def measure(shape, name, count, repeats):
     for times in (4, 16):
         rows[f"{len(polish)} steps, ids x{times}"] = _timed_move(store, np.tile(ids, times), centers, radii, polish,
                                                                 repeats)
+    few = np.sort(np.random.default_rng(0).choice(ids, min(1500, len(ids)), replace=False))
+    policy, most = prototypes.lane_spread, store.spread
+    prototypes.lane_spread = lambda count, most: most  # exactly the spread asked for
+    try:
+        for subset, label in ((ids, "all"), (few, f"{len(few)}")):
+            for spread in (1, 2, 4, 8, 32):
+                store.spread = spread
+                rows[f"{len(polish)} steps, {label}, spread {spread}"] = _timed_move(
+                    store, subset, centers, radii, polish, repeats)
+    finally:
+        prototypes.lane_spread, store.spread = policy, most
     print(f"== {name}: {len(ids)} prototypes, {len(radii)} spheres, median of {repeats}")
     for label, seconds in rows.items():
         print(f"   {label:28s} {1e3 * seconds:8.3f} ms")

@@ -20,6 +20,7 @@ import numpy as np
 from ..errors import BackendError
 from .base import Backend, compiled_program, no_wall, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
+from .prototypes import SPREAD_MAX
 from .numba_backend import FD_STEP, KERNELS
 
 ENTRIES = '''
@@ -111,18 +112,20 @@ def gather_ids(ids, points, clearance, out_points, out_clearance):
 
 
 def index_bound_ids(ids, lower, upper, reach, centers, radii, origin, top, heads, nxt, level_of, level_head,
-                    level_next, level_count, level_rmax, scratch, bound):
-    b = cuda.grid(1)
-    if b < ids.shape[0]:
+                    level_next, level_count, level_rmax, scratch, bound, spread):
+    t = cuda.grid(1)
+    b = t // spread
+    if t % spread == 0 and b < ids.shape[0]:
         i = ids[b]
         bound[b] = index_near(i, lower, upper, reach[i], 0, centers, radii, origin, top, heads, nxt, level_of,
                               level_head, level_next, level_count, level_rmax, scratch, 0, 0)[0]
 
 
 def index_fill_ids(ids, lower, upper, bound, centers, radii, origin, top, heads, nxt, level_of, level_head,
-                   level_next, level_count, level_rmax, found, out):
-    b = cuda.grid(1)
-    if b < ids.shape[0]:
+                   level_next, level_count, level_rmax, found, out, spread):
+    t = cuda.grid(1)
+    b = t // spread
+    if t % spread == 0 and b < ids.shape[0]:
         found[b] = index_near(ids[b], lower, upper, bound[b], 1, centers, radii, origin, top, heads, nxt, level_of,
                               level_head, level_next, level_count, level_rmax, out, b, out.shape[1])[1]
 
@@ -149,9 +152,10 @@ def set_floats(ids, values, out):
 
 
 def move_ids(ids, starts, tries, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
-             steps, h, polish):
-    b = cuda.grid(1)
-    if b < ids.shape[0]:
+             steps, h, polish, spread):
+    t = cuda.grid(1)
+    b = t // spread
+    if t % spread == 0 and b < ids.shape[0]:
         move_one(b, ids, starts, tries, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
                  steps, h, polish)
 '''
@@ -186,6 +190,8 @@ class NumbaCudaBackend(Backend):
         self.cuda = cuda
         self.device = int(device)
         self.launch_bound = not numba.config.ENABLE_CUDASIM  # the simulator runs a launch item by item
+        # Threads per prototype in a move launch, at most (prototypes.lane_spread); idle ones cost a CPU.
+        self.move_spread = SPREAD_MAX if self.launch_bound else 1
         cuda.select_device(self.device)
         self._namespaces = {}  # id(program) -> (program, namespace)
         self._params = weakref.WeakKeyDictionary()  # shape -> its numbers on the device
@@ -291,7 +297,8 @@ class NumbaCudaBackend(Backend):
         """The prototypes on the GPU (see :class:`~ndpack.backends.prototypes.DevicePrototypes`)."""
         from .prototypes import DevicePrototypes
 
-        return DevicePrototypes(_CudaDevice(self, shape), cell_lower, cell_upper, reach, points, clearance, wall)
+        return DevicePrototypes(_CudaDevice(self, shape), cell_lower, cell_upper, reach, points, clearance, wall,
+                                spread=self.move_spread)
 
     def _device_spheres(self, centers, radii):
         """Device copies of the spheres; one at infinity stands in for none, so no array is empty."""

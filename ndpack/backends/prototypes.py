@@ -22,6 +22,23 @@ from .sphere_index import DeviceIndex
 #: the largest clearance, widened by ``WIDEN`` until it holds the leaders and those near them, and
 #: narrowed again (not below the polish window) when it held far more.
 FIRST_WINDOW, WIDEN = 0.05, 4.0
+#: On a GPU, a move launch of few prototypes lasts as long as its slowest warp, and the 32 lanes of
+#: a warp walk the mesh's tree on divergent paths: each step waits for the longest of 32 walks,
+#: both branches of every fork taken in turn. A launch of few prototypes therefore gives each
+#: prototype up to ``SPREAD_MAX`` threads, of which the first moves it and the rest idle, in at
+#: most ``SPREAD_THREADS`` threads (a power of two; see :func:`lane_spread`).
+SPREAD_MAX, SPREAD_THREADS = 32, 1 << 15
+
+
+def lane_spread(count: int, most: int = SPREAD_MAX, threads: int | None = None) -> int:
+    """Threads per prototype of a move launch of ``count`` prototypes: the largest power of two
+    up to ``most`` that keeps the launch within ``threads`` threads (default ``SPREAD_THREADS``),
+    at least 1."""
+    threads = SPREAD_THREADS if threads is None else threads
+    spread = 1
+    while 2 * spread <= most and 2 * spread * count <= threads:
+        spread *= 2
+    return spread
 
 
 def best_starts(backend, shape, candidates, centers, radii, neighbours):
@@ -256,6 +273,9 @@ class DevicePrototypes(Prototypes):
         ``"index"``. The kernels are ``max_all``, ``select_all``, ``touched_index_select``,
         ``gather_ids``, ``index_bound_ids``, ``index_fill_ids``, ``near_finish``, ``move_ids``,
         ``set_points`` and ``set_floats`` of the backend's kernel text.
+    spread : int
+        Most threads per prototype in a move launch (a power of two; see :func:`lane_spread`):
+        ``SPREAD_MAX`` on a GPU, 1 on a CPU device, where idle threads would be work.
 
     The spheres near a cell, and the prototypes a new sphere touches, are found through a
     :class:`~ndpack.backends.sphere_index.DeviceIndex`: built on the host, queried on the device.
@@ -267,9 +287,10 @@ class DevicePrototypes(Prototypes):
     #: Answer rows copied back with the counter, at least; more after larger answers.
     FIRST_PREFIX = 64
 
-    def __init__(self, device, cell_lower, cell_upper, reach, points, clearance, wall=None):
+    def __init__(self, device, cell_lower, cell_upper, reach, points, clearance, wall=None, spread=1):
         super().__init__(cell_lower, cell_upper, reach, points, clearance, wall)
         self.device = device
+        self.spread = spread  # most threads per prototype of a move launch (1 on a CPU device)
         up = device.upload
         count = len(points)
         self.d_points, self.d_clearance = up(points, "point"), up(clearance, "float")
@@ -413,17 +434,18 @@ class DevicePrototypes(Prototypes):
         keeps it), one fills the rows.
         """
         device, count = self.device, len(ids)
+        spread = lane_spread(count, self.spread)  # the index walks diverge as the moves do
         d_centers, d_radii = device.spheres(centers, radii)
         index = self.sphere_index.sync(centers, radii)
         bound = device.empty(count, "float")
-        device.launch("index_bound_ids", count, d_ids, self.d_lower, self.d_upper, self.d_reach, d_centers, d_radii,
-                      *index, self.d_scratch, bound)
+        device.launch("index_bound_ids", spread * count, d_ids, self.d_lower, self.d_upper, self.d_reach, d_centers,
+                      d_radii, *index, self.d_scratch, bound, spread)
         found = device.empty(count, "index")
         while True:
             table = device.empty((count, self.width), "index")
             device.fill(self.d_counter, 0)
-            device.launch("index_fill_ids", count, d_ids, self.d_lower, self.d_upper, bound, d_centers, d_radii,
-                          *index, found, table)
+            device.launch("index_fill_ids", spread * count, d_ids, self.d_lower, self.d_upper, bound, d_centers,
+                          d_radii, *index, found, table, spread)
             device.launch("near_finish", count, found, d_radii.shape[0], self.d_counter, table)
             widest, self.reach[ids] = device.fetch((self.d_counter, 1), (bound, count))
             if np.isnan(self.reach[ids]).any():  # index_near met a sphere id beyond the spheres
@@ -448,6 +470,7 @@ class DevicePrototypes(Prototypes):
         key = (id(steps), len(steps))
         if key not in self._steps:  # the driver's two schedules: copy each once
             self._steps[key] = (steps, device.upload(steps, "float"))
-        device.launch("move_ids", count, d_ids, d_starts, tries, self.d_points, self.d_clearance, self.d_polished,
-                      self.d_lower, self.d_upper, self.d_wall, device.params, d_centers, d_radii, table,
-                      self._steps[key][1], device.h, int(polish))
+        spread = lane_spread(count, self.spread)
+        device.launch("move_ids", spread * count, d_ids, d_starts, tries, self.d_points, self.d_clearance,
+                      self.d_polished, self.d_lower, self.d_upper, self.d_wall, device.params, d_centers, d_radii,
+                      table, self._steps[key][1], device.h, int(polish), spread)

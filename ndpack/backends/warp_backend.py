@@ -24,6 +24,7 @@ import numpy as np
 from ..errors import BackendError
 from .base import Backend, compiled_program, no_wall, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
+from .prototypes import SPREAD_MAX
 
 KERNELS = Path(__file__).with_name("warp_kernels.py").read_text()
 #: Central-difference step as a fraction of the shape's scale, per precision.
@@ -61,6 +62,8 @@ class WarpBackend(Backend):
             raise BackendError("Warp's CPU compiler is not available here; use device='cuda:0' or backend='numba'")
         self.wp = wp
         self.launch_bound = self.device.is_cuda
+        # Threads per prototype in a move launch, at most (prototypes.lane_spread); idle ones cost a CPU.
+        self.move_spread = SPREAD_MAX if self.launch_bound else 1
         self.precision = precision
         self.margin = MARGIN[precision]
         self.float = np.float64 if precision == "float64" else np.float32
@@ -206,7 +209,8 @@ class WarpBackend(Backend):
         """The prototypes on this backend's device (see :class:`~ndpack.backends.prototypes.DevicePrototypes`)."""
         from .prototypes import DevicePrototypes
 
-        return DevicePrototypes(_WarpDevice(self, shape), cell_lower, cell_upper, reach, points, clearance, wall)
+        return DevicePrototypes(_WarpDevice(self, shape), cell_lower, cell_upper, reach, points, clearance, wall,
+                                spread=self.move_spread)
 
     def touched(self, points, clearance, new_centers, new_radii):
         if len(points) == 0:

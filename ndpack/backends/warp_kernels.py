@@ -366,9 +366,14 @@ def index_bound_ids(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), 
                     origin: wp.array(dtype=F), top: F, heads: wp.array(dtype=wp.int32), nxt: wp.array(dtype=wp.int32),
                     level_of: wp.array(dtype=wp.int32), level_head: wp.array(dtype=wp.int32),
                     level_next: wp.array(dtype=wp.int32), level_count: wp.array(dtype=wp.int32),
-                    level_rmax: wp.array(dtype=F), scratch: wp.array2d(dtype=wp.int32), bound: wp.array(dtype=F)):
-    """``bound[b]``: the reference's upper bound of the clearance in the cell of ``ids[b]``."""
-    b = wp.tid()
+                    level_rmax: wp.array(dtype=F), scratch: wp.array2d(dtype=wp.int32), bound: wp.array(dtype=F),
+                    spread: int):
+    """``bound[b]``: the reference's upper bound of the clearance in the cell of ``ids[b]``, on
+    thread ``b * spread`` (as ``move_ids``)."""
+    t = wp.tid()
+    if t % spread != 0:
+        return
+    b = t // spread
     i = ids[b]
     c, n = index_near(lower[i], upper[i], reach[i], 0, centers, radii, origin, top, heads, nxt, level_of, level_head,
                       level_next, level_count, level_rmax, scratch, -1)
@@ -381,9 +386,14 @@ def index_fill_ids(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), u
                    origin: wp.array(dtype=F), top: F, heads: wp.array(dtype=wp.int32), nxt: wp.array(dtype=wp.int32),
                    level_of: wp.array(dtype=wp.int32), level_head: wp.array(dtype=wp.int32),
                    level_next: wp.array(dtype=wp.int32), level_count: wp.array(dtype=wp.int32),
-                   level_rmax: wp.array(dtype=F), found: wp.array(dtype=wp.int32), out: wp.array2d(dtype=wp.int32)):
-    """Row ``b``: the spheres that come within ``bound[b]`` of the cell of ``ids[b]``; ``found[b]`` their count."""
-    b = wp.tid()
+                   level_rmax: wp.array(dtype=F), found: wp.array(dtype=wp.int32), out: wp.array2d(dtype=wp.int32),
+                   spread: int):
+    """Row ``b``: the spheres that come within ``bound[b]`` of the cell of ``ids[b]``; ``found[b]`` their
+    count; on thread ``b * spread`` (as ``move_ids``)."""
+    t = wp.tid()
+    if t % spread != 0:
+        return
+    b = t // spread
     i = ids[b]
     c, n = index_near(lower[i], upper[i], bound[b], 1, centers, radii, origin, top, heads, nxt, level_of, level_head,
                       level_next, level_count, level_rmax, out, b)
@@ -440,10 +450,15 @@ def move_ids(ids: wp.array(dtype=wp.int32), starts: wp.array2d(dtype=VecD), trie
              clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD),
              upper: wp.array(dtype=VecD), wall: wp.array(dtype=F), prm: wp.array(dtype=F),
              centers: wp.array(dtype=VecD), radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32),
-             steps: wp.array(dtype=F), h: F, polish: int):
+             steps: wp.array(dtype=F), h: F, polish: int, spread: int):
     """Move prototype ``ids[b]`` in place: from the best of its point and ``starts[:tries, b]``,
-    converge; keep the result (``polish`` 0), or keep it only if better and mark it polished (1)."""
-    b = wp.tid()
+    converge; keep the result (``polish`` 0), or keep it only if better and mark it polished (1).
+    Thread ``b * spread`` moves it; the ``spread - 1`` threads after it idle (see
+    :func:`ndpack.backends.prototypes.lane_spread`)."""
+    t = wp.tid()
+    if t % spread != 0:
+        return
+    b = t // spread
     i = ids[b]
     x = points[i]
     if tries > 0:
