@@ -243,26 +243,49 @@ class Oracle:
         return f"{type(self).__name__}(dim={self.dim})"
 
     # ------------------------------------------------------------------ CSG
-    # Operands may be other libraries' shapes (manifold3d, trimesh, shapely): see as_oracle.
+    # Operands may be other libraries' shapes (manifold3d, trimesh, shapely): see as_oracle. An
+    # empty part (ndpack.shapes.empty) is left out as the tree is built: a - empty is a, a & empty
+    # is empty, so no node holds one.
     def union(self, *others: Oracle) -> Oracle:
-        from .shapes.adapters import as_oracle
         from .shapes.csg import Union
+        from .shapes.empty import Empty, Everything
 
-        return Union(self, *map(as_oracle, others))
+        parts = _parts(self, others)  # self is neither Empty nor Everything: they have their own
+        for part in parts:
+            if isinstance(part, Everything):
+                return part
+        kept = [part for part in parts if not isinstance(part, Empty)]
+        return kept[0] if len(kept) == 1 else Union(*kept)
 
     def intersection(self, *others: Oracle) -> Oracle:
-        from .shapes.adapters import as_oracle
         from .shapes.csg import Intersection
+        from .shapes.empty import Empty, Everything
 
-        return Intersection(self, *map(as_oracle, others))
+        parts = _parts(self, others)
+        for part in parts:
+            if isinstance(part, Empty):
+                return part
+        kept = [part for part in parts if not isinstance(part, Everything)]
+        if len(kept) == 1:
+            return kept[0]
+        bounds = np.stack([part.bounds for part in kept])
+        if np.any(bounds[:, 0].max(axis=0) >= bounds[:, 1].min(axis=0)):
+            return Empty(self.dim, f"the intersection of {', '.join(map(repr, kept))} is empty: their bounding "
+                                   "boxes do not overlap")
+        return Intersection(*kept)
 
     def difference(self, *others: Oracle) -> Oracle:
-        from .shapes.adapters import as_oracle
         from .shapes.csg import Difference
+        from .shapes.empty import Empty, Everything
 
         result = self
-        for other in others:
-            result = Difference(result, as_oracle(other))
+        for other in _parts(self, others)[1:]:
+            if isinstance(result, Empty) or isinstance(other, Empty):
+                continue
+            if isinstance(other, Everything):
+                result = Empty(self.dim, f"{result!r} less all of space ({other.reason})")
+            else:
+                result = Difference(result, other)
         return result
 
     def __ror__(self, other) -> Oracle:
@@ -317,13 +340,25 @@ class Oracle:
     def smooth_union(self, other: Oracle, blend: float) -> Oracle:
         """Union with a fillet of width ``blend``; its distance is a lower bound."""
         from .shapes.csg import SmoothUnion
+        from .shapes.empty import is_special
 
+        other = _parts(self, (other,))[1]
+        if is_special(other):  # nothing to blend with: the union alone
+            return self.union(other)
         return SmoothUnion(self, other, blend)
 
-    __or__ = union
-    __and__ = intersection
-    __sub__ = difference
-    __invert__ = complement
+    # Through the methods, so that a subclass's own (the empty set's) serve the operators too.
+    def __or__(self, other) -> Oracle:
+        return self.union(other)
+
+    def __and__(self, other) -> Oracle:
+        return self.intersection(other)
+
+    def __sub__(self, other) -> Oracle:
+        return self.difference(other)
+
+    def __invert__(self) -> Oracle:
+        return self.complement()
 
 
 def monte_carlo_volume(oracle: Oracle, samples: int, seed: int) -> Volume:
@@ -344,6 +379,15 @@ def monte_carlo_volume(oracle: Oracle, samples: int, seed: int) -> Volume:
     smoothed = (inside + 0.5) / (samples + 1.0)
     error = box_volume * math.sqrt(smoothed * (1 - smoothed) / samples)
     return Volume(box_volume * fraction, error)
+
+
+def _parts(shape: Oracle, others) -> list:
+    """``shape`` and ``others`` as ndpack shapes (other libraries' converted), of one dimension."""
+    from .shapes.adapters import as_oracle
+
+    parts = [shape, *map(as_oracle, others)]
+    check_compatible(*parts)
+    return parts
 
 
 def check_compatible(*oracles: Oracle) -> int:
@@ -367,8 +411,12 @@ def check_packable(shape: Oracle, samples_per_face: int = 512, seed: int = 0) ->
     The bounds are checked by sampling each face of the bounding box: no face point may lie
     strictly inside the shape (beyond a relative tolerance of 1e-9).
     """
+    from .shapes.empty import Empty
+
     if not isinstance(shape, Oracle):
         check_compatible(shape)
+    if isinstance(shape, Empty):
+        raise ShapeError(f"there is nothing to pack: {shape.reason}")
     bounds = shape.bounds
     if bounds.shape != (2, shape.dim):
         raise BoundsError(f"bounds must have shape (2, {shape.dim}), got {bounds.shape}")

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ShapeError
+from .empty import Empty
 
 
 def _module_of(obj) -> str:
@@ -23,8 +24,8 @@ def from_manifold(solid):
     Raises
     ------
     ShapeError
-        If the solid is empty or manifold3d reports it invalid (for example a non-manifold input
-        mesh), naming manifold3d's status.
+        If manifold3d reports the solid invalid (for example a non-manifold input mesh), naming
+        manifold3d's status. An empty solid is an :class:`~ndpack.shapes.empty.Empty`.
     """
     import manifold3d
 
@@ -36,8 +37,8 @@ def from_manifold(solid):
             f"the manifold3d solid is not valid ({status.name}): manifold3d could not build a closed "
             "2-manifold (check the input mesh: every edge must join exactly two triangles)"
         )
-    if solid.is_empty():
-        raise ShapeError("the manifold3d solid is empty (a difference or intersection removed everything)")
+    if solid.is_empty():  # a valid part of a tree; packed alone, an error (see ndpack.shapes.empty)
+        return Empty(3, "the manifold3d solid is empty (a difference or intersection removed everything)")
     mesh = solid.to_mesh64() if hasattr(solid, "to_mesh64") else solid.to_mesh()
     vertices = np.asarray(mesh.vert_properties, dtype=np.float64)[:, :3]
     faces = np.asarray(mesh.tri_verts, dtype=np.int64)
@@ -50,7 +51,7 @@ def from_cross_section(section):
     from .polygon import Polygon
 
     if section.is_empty():
-        raise ShapeError("the manifold3d cross-section is empty")
+        return Empty(2, "the manifold3d cross-section is empty (a difference or intersection removed everything)")
     return Polygon.from_rings([np.asarray(ring, dtype=np.float64) for ring in section.to_polygons()])
 
 
@@ -58,6 +59,8 @@ def from_shapely(geometry):
     """A :class:`~ndpack.Polygon` of a shapely ``Polygon`` or ``MultiPolygon``."""
     from .polygon import Polygon
 
+    if geometry.is_empty:  # an empty difference is a polygon, or a collection, of nothing
+        return Empty(2, "the shapely polygon is empty")
     kind = geometry.geom_type
     if kind == "Polygon":
         parts = [geometry]
@@ -65,8 +68,6 @@ def from_shapely(geometry):
         parts = list(geometry.geoms)
     else:
         raise ShapeError(f"a shapely {kind} has no area to pack; pass a Polygon or MultiPolygon")
-    if geometry.is_empty:
-        raise ShapeError("the shapely polygon is empty")
     if not geometry.is_valid:
         raise ShapeError("the shapely polygon is not valid (its rings cross); repair it with shapely.make_valid")
     rings = []

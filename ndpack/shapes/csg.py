@@ -30,8 +30,21 @@ import numpy as np
 
 from ..errors import ShapeError
 from ..oracle import Oracle, as_vector, check_compatible
+from .empty import is_special
 
 INFINITE = np.inf
+
+
+def check_parts(node: str, *children: Oracle) -> int:
+    """The children's common dimension; a clear error for a child that is an empty set or all
+    of space, which only the operators can combine (they leave it out, see
+    :mod:`ndpack.shapes.empty`)."""
+    dim = check_compatible(*children)
+    for child in children:
+        if is_special(child):
+            raise ShapeError(f"{node} cannot hold {child!r} ({child.reason}); combine shapes with |, &, - and ~, "
+                             "which leave an empty part out")
+    return dim
 
 
 class _Boolean(Oracle):
@@ -43,7 +56,7 @@ class _Boolean(Oracle):
     def __init__(self, *children: Oracle):
         if len(children) < 2:
             raise ShapeError(f"{type(self).__name__} needs at least two shapes, got {len(children)}")
-        self.dim = check_compatible(*children)
+        self.dim = check_parts(type(self).__name__, *children)
         flat = []
         for child in children:  # (a | b) | c is stored as one node of three children
             flat.extend(child.children if type(child) is type(self) else [child])
@@ -129,7 +142,7 @@ class Complement(Oracle):
     """Everything outside the child: the distance negated."""
 
     def __init__(self, child: Oracle):
-        self.dim = check_compatible(child)
+        self.dim = check_parts(type(self).__name__, child)
         self.child = child
         self.exact_inside = child.exact_outside
         self.exact_outside = child.exact_inside
@@ -160,8 +173,6 @@ class Complement(Oracle):
     def complement(self):
         return self.child
 
-    __invert__ = complement
-
     def __repr__(self):
         return f"~{self.child!r}"
 
@@ -170,7 +181,7 @@ class Difference(Oracle):
     """Points inside ``a`` and outside ``b``: ``max(a, -b)``."""
 
     def __init__(self, a: Oracle, b: Oracle):
-        self.dim = check_compatible(a, b)
+        self.dim = check_parts(type(self).__name__, a, b)
         self.a, self.b = a, b
         self.exact_inside = a.exact_inside and b.exact_outside
         self.exact_outside = False
@@ -207,7 +218,7 @@ class _Transformed(Oracle):
     """A child seen through a map: subclasses define ``_to_child`` and ``_from_child_gradient``."""
 
     def __init__(self, child: Oracle):
-        self.dim = check_compatible(child)
+        self.dim = check_parts(type(self).__name__, child)
         self.child = child
         self.exact_inside = child.exact_inside
         self.exact_outside = child.exact_outside
@@ -364,7 +375,7 @@ class Offset(Oracle):
     """The child dilated by ``amount`` > 0 or eroded by ``-amount``: ``f - amount``."""
 
     def __init__(self, child: Oracle, amount: float):
-        self.dim = check_compatible(child)
+        self.dim = check_parts(type(self).__name__, child)
         self.child = child
         self.amount = float(amount)
         if not np.isfinite(self.amount):
@@ -408,7 +419,7 @@ class Shell(Oracle):
     """The layer of ``thickness`` centred on the child's boundary: ``|f| - thickness / 2``."""
 
     def __init__(self, child: Oracle, thickness: float):
-        self.dim = check_compatible(child)
+        self.dim = check_parts(type(self).__name__, child)
         self.child = child
         self.thickness = float(thickness)
         if not (np.isfinite(self.thickness) and self.thickness > 0):
@@ -450,7 +461,7 @@ class SmoothUnion(Oracle):
     """
 
     def __init__(self, a: Oracle, b: Oracle, blend: float):
-        self.dim = check_compatible(a, b)
+        self.dim = check_parts(type(self).__name__, a, b)
         self.a, self.b = a, b
         self.blend = float(blend)
         if not (np.isfinite(self.blend) and self.blend > 0):
