@@ -14,6 +14,7 @@ Everything public is re-exported here; the rest is internal.
 from .errors import (
     BackendError,
     KernelError,
+    GridWarning,
     MeshWarning,
     BoundsError,
     DimensionError,
@@ -35,7 +36,7 @@ from .verify import Verification, verify
 __version__ = "0.1.0"
 
 __all__ = [
-    "BackendError", "BoundsError", "KernelError", "DimensionError", "InvalidPackingError", "MeshWarning", "NdpackError", "OracleError", "Oracle",
+    "BackendError", "BoundsError", "KernelError", "DimensionError", "GridWarning", "InvalidPackingError", "MeshWarning", "NdpackError", "OracleError", "Oracle",
     "Packing", "ParameterError", "RepairWarning", "Round", "RoundStats", "ShapeError", "Verification", "Volume",
     "ball_volume", "pack", "rotation", "verify", *_shape_names,
 ]

@@ -42,6 +42,11 @@ class MeshWarning(UserWarning):
     """A mesh was repaired, or its inside is decided by a method that can be wrong near its holes."""
 
 
+class GridWarning(UserWarning):
+    """The shape is thinner than the packing grid's cells: the first points inside it were found
+    by a search, and spheres may come out well below the largest that fit (pass a finer ``grid=``)."""
+
+
 class InvalidPackingError(NdpackError, RuntimeError):
     """A packing failed the final float64 check and ``on_invalid="raise"`` asked not to repair it."""
 

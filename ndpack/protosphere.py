@@ -30,7 +30,7 @@ from tqdm.auto import tqdm
 
 from .backends import get_backend
 from .backends.prototypes import best_starts
-from .errors import InvalidPackingError, ParameterError, RepairWarning, ShapeError
+from .errors import GridWarning, InvalidPackingError, ParameterError, RepairWarning, ShapeError
 from .oracle import Oracle, ball_volume, check_compatible, check_packable
 from .packing import Packing, RoundStats
 from .rounds import FAST_WINDOW, POLISH_AHEAD, POLISH_WINDOW, SPLIT_RATIO, Fast, Faithful
@@ -40,6 +40,9 @@ from .verify import verify
 
 #: Grid cells over the bounds when ``grid`` is not given (32^3 in 3D, 181^2 in 2D).
 DEFAULT_CELLS = 32_768
+#: A shape thinner than a cell, whose cells' starts all lie outside: this many of them, the
+#: nearest, step across its boundary, at most this many times each (RunState._find_interior).
+FIND_POINTS, FIND_STEPS = 4096, 100
 #: Refuse grids larger than this: memory grows with the cell count.
 MAX_CELLS = 8_000_000
 #: First and last ``eps`` of the cooling schedule. Large first steps cross the cell; the last ones
@@ -215,11 +218,14 @@ class RunState:
         points, clearance = best_starts(self.backend, self.shape, starts, *self.spheres, no_spheres)
         alive = clearance > 0
         if not alive.any():
-            raise ShapeError(
-                f"found no interior point of {self.shape!r} in {total:,} grid cells: the shape "
-                "is empty (check the CSG, e.g. a difference that removes everything) or thinner "
-                "than a cell (pass a finer grid=)"
-            )
+            points, clearance = self._find_interior(points, clearance, cells, lower, cell_size, counts)
+            alive = clearance > 0
+            if not alive.any():
+                raise ShapeError(
+                    f"found no interior point of {self.shape!r}: not at the centres of the {int(keep.sum()):,} grid "
+                    f"cells near it (of {total:,}), nor at {self.restarts} random points in each, nor by "
+                    f"{FIND_STEPS} steps across its boundary from the {min(FIND_POINTS, int(keep.sum())):,} nearest; the "
+                    "shape is empty (check the CSG) or much thinner than a cell (pass a finer grid=)")
         cells = {name: value[alive] for name, value in cells.items()}
         points, clearance = self.backend.converge(
             self.shape, points[alive], cells["lower"], cells["upper"],
@@ -229,6 +235,49 @@ class RunState:
         self.prototypes = self.backend.prototypes(
             self.shape, cells["lower"], cells["upper"], cells["reach"], points, clearance, cells["wall"]
         )
+
+    def _find_interior(self, points, clearance, cells, lower, cell_size, counts):
+        """Starts inside a shape thinner than a cell, which held none of ``points`` (k, d) (the
+        best start of each of the ``cells``, clearances (k,) all <= 0).
+
+        A prototype's move cannot enter a shape (its steps shrink with the distance), so the
+        ``FIND_POINTS`` starts nearest the shape step across its boundary instead: by 1.5 times
+        their distance along its gradient, up to ``FIND_STEPS`` times (a relaxed projection: for
+        a convex shape with an interior it ends inside). A kept cell that holds a point that got
+        in starts there (the deepest of several). Returns points (k, d) and clearances (k,),
+        positive where a point is inside.
+        """
+        order = np.argsort(-clearance, kind="stable")[:FIND_POINTS]
+        trial = points[order].copy()
+        for _ in range(FIND_STEPS):
+            distance, gradient = self.shape._distance_and_gradient(trial)
+            outside = distance >= 0
+            if not outside.any() or (~outside).sum() >= len(trial) // 2:
+                break
+            trial[outside] -= 1.5 * (distance[outside] + self.margin)[:, None] * gradient[outside]
+            trial = np.clip(trial, self.shape.bounds[0], self.shape.bounds[1])
+        depth = -self.shape._distance(trial)
+        inside = depth > 0
+        # Each point that got in starts in the kept cell that holds it (one that holds an interior
+        # point is within half its diagonal of the inside, so it was kept).
+        index = np.clip(np.floor((trial[inside] - lower) / cell_size).astype(np.int64), 0, counts - 1)
+        flat = np.ravel_multi_index(index.T, tuple(counts))
+        kept = np.ravel_multi_index(np.floor((cells["lower"] - lower) / cell_size + 0.5).astype(np.int64).T,
+                                    tuple(counts))
+        sorted_kept = np.argsort(kept)
+        rows = sorted_kept[np.minimum(np.searchsorted(kept, flat, sorter=sorted_kept), len(kept) - 1)]
+        found = kept[rows] == flat
+        points, clearance = points.copy(), clearance.copy()
+        for row, point, value in sorted(zip(rows[found], trial[inside][found], depth[inside][found]),
+                                        key=lambda item: item[2]):
+            points[row], clearance[row] = point, value  # ascending: the deepest of a cell is written last
+        if found.any():
+            warnings.warn(
+                f"the shape is thinner than the grid's cells ({float(cell_size.max()):.3g} wide; the deepest point "
+                f"found is {float(depth.max()):.3g} inside): no cell centre or random start lay inside, so the first "
+                f"points were found by a search, in {int(found.sum()):,} cells; spheres may come out well below the "
+                "largest that fit: pass a finer grid= if it fits in memory", GridWarning, stacklevel=5)
+        return points, clearance
 
     def cell_bounds(self, lower, upper):
         """For cells ``lower``, ``upper`` (k, d): their centres (k, d), an upper bound of any

@@ -56,7 +56,7 @@ def test_random_csg_packs_validly(shape, seed):
     try:
         packing = nd.pack(shape, n=12, grid=12, seed=seed)
     except nd.ShapeError as error:  # a difference may remove everything: that must be said
-        assert "no interior point" in str(error)
+        assert "no interior point" in str(error) or "nothing to pack" in str(error)
         return
     report = nd.verify(packing, shape)
     assert report.ok, report.summary()
