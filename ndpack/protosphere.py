@@ -43,6 +43,12 @@ DEFAULT_CELLS = 32_768
 #: A shape thinner than a cell, whose cells' starts all lie outside: this many of them, the
 #: nearest, step across its boundary, at most this many times each (RunState._find_interior).
 FIND_POINTS, FIND_STEPS = 4096, 100
+#: A kept cell (one within half its diagonal of the inside) whose centre and random starts all
+#: lie outside gets its prototype by stepping its best start across the boundary, confined to the
+#: cell, at most ``STEP_IN_STEPS`` times (RunState._step_in); before, such cells had none, and a
+#: coarse faithful grid could run out of room (a 4-D simplex on a grid of 4: 15 of 51 spheres).
+#: ``STEP_IN = False`` turns it off, for comparisons (bench/step_in.py).
+STEP_IN, STEP_IN_STEPS = True, 20
 #: Refuse grids larger than this: memory grows with the cell count.
 MAX_CELLS = 8_000_000
 #: First and last ``eps`` of the cooling schedule. Large first steps cross the cell; the last ones
@@ -217,6 +223,13 @@ class RunState:
         no_spheres = np.zeros((len(cells["lower"]), 0), dtype=np.int64)
         points, clearance = best_starts(self.backend, self.shape, starts, *self.spheres, no_spheres)
         alive = clearance > 0
+        thin = not alive.any()  # no cell centre or random start lies inside
+        if STEP_IN and not alive.all():  # cells near the boundary whose starts all lie outside
+            out = np.flatnonzero(~alive)
+            moved, depth = self._step_in(points[out], cells["lower"][out], cells["upper"][out])
+            got = depth > 0
+            points[out[got]], clearance[out[got]] = moved[got], depth[got]
+            alive = clearance > 0
         if not alive.any():
             points, clearance = self._find_interior(points, clearance, cells, lower, cell_size, counts)
             alive = clearance > 0
@@ -226,6 +239,12 @@ class RunState:
                     f"cells near it (of {total:,}), nor at {self.restarts} random points in each, nor by "
                     f"{FIND_STEPS} steps across its boundary from the {min(FIND_POINTS, int(keep.sum())):,} nearest; the "
                     "shape is empty (check the CSG) or much thinner than a cell (pass a finer grid=)")
+        if thin:
+            warnings.warn(
+                f"the shape is thinner than the grid's cells ({float(cell_size.max()):.3g} wide; the deepest point "
+                f"found is {float(clearance.max()):.3g} inside): no cell centre or random start lay inside, so the "
+                f"first points were found by a search, in {int(alive.sum()):,} cells; spheres may come out well "
+                "below the largest that fit: pass a finer grid= if it fits in memory", GridWarning, stacklevel=4)
         cells = {name: value[alive] for name, value in cells.items()}
         points, clearance = self.backend.converge(
             self.shape, points[alive], cells["lower"], cells["upper"],
@@ -236,27 +255,40 @@ class RunState:
             self.shape, cells["lower"], cells["upper"], cells["reach"], points, clearance, cells["wall"]
         )
 
+    def _step_in(self, points, lower, upper, steps=None):
+        """Points (k, d) outside the shape stepped across its boundary, each confined to its box
+        ``lower``, ``upper`` (k, d), and their depths (k,) (positive where a point got in).
+
+        A prototype's move cannot enter a shape (its steps shrink with the distance), so a point
+        outside steps 1.5 times its distance (plus the safety margin) along the gradient, up to
+        ``steps`` times (default ``STEP_IN_STEPS``): a relaxed projection, which for a convex
+        part with an interior ends inside. On the host, in float64 (the shape's own
+        ``_distance_and_gradient``): it runs once, for the cells whose starts all lie outside.
+        """
+        trial = points.copy()
+        active = np.arange(len(trial))
+        for _ in range(STEP_IN_STEPS if steps is None else steps):
+            distance, gradient = self.shape._distance_and_gradient(trial[active])
+            outside = distance >= 0
+            active, distance, gradient = active[outside], distance[outside], gradient[outside]
+            if len(active) == 0:
+                break
+            trial[active] = np.clip(trial[active] - 1.5 * (distance + self.margin)[:, None] * gradient,
+                                    lower[active], upper[active])
+        return trial, -self.shape._distance(trial)
+
     def _find_interior(self, points, clearance, cells, lower, cell_size, counts):
         """Starts inside a shape thinner than a cell, which held none of ``points`` (k, d) (the
         best start of each of the ``cells``, clearances (k,) all <= 0).
 
-        A prototype's move cannot enter a shape (its steps shrink with the distance), so the
-        ``FIND_POINTS`` starts nearest the shape step across its boundary instead: by 1.5 times
-        their distance along its gradient, up to ``FIND_STEPS`` times (a relaxed projection: for
-        a convex shape with an interior it ends inside). A kept cell that holds a point that got
-        in starts there (the deepest of several). Returns points (k, d) and clearances (k,),
-        positive where a point is inside.
+        The ``FIND_POINTS`` starts nearest the shape step across its boundary (:meth:`_step_in`),
+        free in the shape's bounds, up to ``FIND_STEPS`` times. A kept cell that holds a point
+        that got in starts there (the deepest of several). Returns points (k, d) and clearances
+        (k,), positive where a point is inside.
         """
         order = np.argsort(-clearance, kind="stable")[:FIND_POINTS]
-        trial = points[order].copy()
-        for _ in range(FIND_STEPS):
-            distance, gradient = self.shape._distance_and_gradient(trial)
-            outside = distance >= 0
-            if not outside.any() or (~outside).sum() >= len(trial) // 2:
-                break
-            trial[outside] -= 1.5 * (distance[outside] + self.margin)[:, None] * gradient[outside]
-            trial = np.clip(trial, self.shape.bounds[0], self.shape.bounds[1])
-        depth = -self.shape._distance(trial)
+        bounds = np.broadcast_to(self.shape.bounds[:, None], (2, len(order), self.dim))
+        trial, depth = self._step_in(points[order], bounds[0], bounds[1], FIND_STEPS)
         inside = depth > 0
         # Each point that got in starts in the kept cell that holds it (one that holds an interior
         # point is within half its diagonal of the inside, so it was kept).
@@ -271,12 +303,6 @@ class RunState:
         for row, point, value in sorted(zip(rows[found], trial[inside][found], depth[inside][found]),
                                         key=lambda item: item[2]):
             points[row], clearance[row] = point, value  # ascending: the deepest of a cell is written last
-        if found.any():
-            warnings.warn(
-                f"the shape is thinner than the grid's cells ({float(cell_size.max()):.3g} wide; the deepest point "
-                f"found is {float(depth.max()):.3g} inside): no cell centre or random start lay inside, so the first "
-                f"points were found by a search, in {int(found.sum()):,} cells; spheres may come out well below the "
-                "largest that fit: pass a finer grid= if it fits in memory", GridWarning, stacklevel=5)
         return points, clearance
 
     def cell_bounds(self, lower, upper):

@@ -382,3 +382,13 @@ def test_a_shape_thinner_than_the_cells_is_found_and_packed(mode):
     assert len(packing) == 3 and packing.verify().ok
     # The first sphere within a fifth of the largest that fits, though the cells are 130 times as wide.
     assert 0.8 * _inradius(THIN_SIMPLEX) <= packing.radii[0] <= _inradius(THIN_SIMPLEX) * (1 + 1e-9)
+
+
+def test_a_coarse_faithful_grid_does_not_run_out_of_room():
+    """A 4-D simplex on a grid of 4: the cells near its boundary whose starts all lay outside had
+    no prototype, and the faithful mode stopped at 15 of 51 spheres (no room)."""
+    shape = nd.Simplex([[0.4602, 0.5821, -0.379, -0.3621], [0.8661, -0.039, -0.6904, -0.3044],
+                        [-0.8081, 0.568, 0.0748, -0.0781], [-0.1044, 0.581, 0.0505, 0.1617],
+                        [-0.5906, -0.6482, -0.6381, -0.98]])
+    packing = nd.pack(shape, n=51, grid=4, backend="numba")
+    assert len(packing) == 51 and packing.stop_reason == "count" and packing.verify().ok
