@@ -258,7 +258,7 @@ class Oracle:
         return kept[0] if len(kept) == 1 else Union(*kept)
 
     def intersection(self, *others: Oracle) -> Oracle:
-        from .shapes.csg import Intersection
+        from .shapes.csg import Intersection, common_box
         from .shapes.empty import Empty, Everything
 
         parts = _parts(self, others)
@@ -268,8 +268,7 @@ class Oracle:
         kept = [part for part in parts if not isinstance(part, Everything)]
         if len(kept) == 1:
             return kept[0]
-        bounds = np.stack([part.bounds for part in kept])
-        if np.any(bounds[:, 0].max(axis=0) >= bounds[:, 1].min(axis=0)):
+        if common_box(kept) is None:
             return Empty(self.dim, f"the intersection of {', '.join(map(repr, kept))} is empty: their bounding "
                                    "boxes do not overlap")
         return Intersection(*kept)

@@ -231,7 +231,8 @@ class RunState:
             points[out[got]], clearance[out[got]] = moved[got], depth[got]
             alive = clearance > 0
         if not alive.any():
-            points, clearance = self._find_interior(points, clearance, cells, lower, cell_size, counts)
+            points, clearance = self._find_interior(points, clearance, np.flatnonzero(keep), lower, cell_size,
+                                                    counts)
             alive = clearance > 0
             if not alive.any():
                 raise ShapeError(
@@ -277,9 +278,10 @@ class RunState:
                                     lower[active], upper[active])
         return trial, -self.shape._distance(trial)
 
-    def _find_interior(self, points, clearance, cells, lower, cell_size, counts):
+    def _find_interior(self, points, clearance, kept, lower, cell_size, counts):
         """Starts inside a shape thinner than a cell, which held none of ``points`` (k, d) (the
-        best start of each of the ``cells``, clearances (k,) all <= 0).
+        best start of each kept cell, clearances (k,) all <= 0; ``kept`` (k,) their flat grid
+        indices, ascending).
 
         The ``FIND_POINTS`` starts nearest the shape step across its boundary (:meth:`_step_in`),
         free in the shape's bounds, up to ``FIND_STEPS`` times. A kept cell that holds a point
@@ -294,10 +296,7 @@ class RunState:
         # point is within half its diagonal of the inside, so it was kept).
         index = np.clip(np.floor((trial[inside] - lower) / cell_size).astype(np.int64), 0, counts - 1)
         flat = np.ravel_multi_index(index.T, tuple(counts))
-        kept = np.ravel_multi_index(np.floor((cells["lower"] - lower) / cell_size + 0.5).astype(np.int64).T,
-                                    tuple(counts))
-        sorted_kept = np.argsort(kept)
-        rows = sorted_kept[np.minimum(np.searchsorted(kept, flat, sorter=sorted_kept), len(kept) - 1)]
+        rows = np.minimum(np.searchsorted(kept, flat), len(kept) - 1)
         found = kept[rows] == flat
         points, clearance = points.copy(), clearance.copy()
         for row, point, value in sorted(zip(rows[found], trial[inside][found], depth[inside][found]),

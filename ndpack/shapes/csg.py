@@ -47,6 +47,13 @@ def check_parts(node: str, *children: Oracle) -> int:
     return dim
 
 
+def common_box(shapes) -> np.ndarray | None:
+    """(2, d): the box that the bounding boxes of ``shapes`` share; None where they do not overlap."""
+    bounds = np.stack([shape.bounds for shape in shapes])
+    box = np.stack([bounds[:, 0].max(axis=0), bounds[:, 1].min(axis=0)])
+    return None if np.any(box[0] >= box[1]) else box
+
+
 class _Boolean(Oracle):
     """Shared code of n-ary min/max nodes: evaluate all children, keep the active one per point."""
 
@@ -129,9 +136,8 @@ class Intersection(_Boolean):
         self.exact_inside = all(c.exact_inside for c in self.children)
         self.exact_outside = False
         self.convex = all(c.convex for c in self.children)
-        bounds = np.stack([c.bounds for c in self.children])
-        self._bounds = np.stack([bounds[:, 0].max(axis=0), bounds[:, 1].min(axis=0)])
-        if np.any(self._bounds[0] >= self._bounds[1]):
+        self._bounds = common_box(self.children)
+        if self._bounds is None:
             raise ShapeError(
                 f"the intersection of {', '.join(map(repr, self.children))} is empty: their "
                 "bounding boxes do not overlap"

@@ -32,6 +32,22 @@ class _Special(Oracle):
 
     _tape = _kernel
 
+    def _gradient(self, points):
+        return np.zeros_like(points)
+
+    # Moved, turned, scaled or grown, nothing stays nothing and all of space stays all of space.
+    def translate(self, offset):
+        return self
+
+    def rotate(self, matrix, center=None):
+        return self
+
+    def scale_by(self, factor, center=None):
+        return self
+
+    def offset(self, amount):
+        return self
+
 
 class Empty(_Special):
     """No point at all: its distance is +inf everywhere.
@@ -53,13 +69,10 @@ class Empty(_Special):
     def _distance(self, points):
         return np.full(len(points), np.inf)
 
-    def _gradient(self, points):
-        return np.zeros_like(points)
-
     def _exact_volume(self):
         return 0.0
 
-    # Nothing moved, grown or combined with nothing is nothing (or the other part).
+    # Combined with nothing, the other part (or nothing).
     def union(self, *others):
         others = _dimension(self, others)
         return others[0].union(*others[1:]) if others else self
@@ -74,18 +87,6 @@ class Empty(_Special):
 
     def complement(self):
         return Everything(self.dim, f"the complement of an empty set ({self.reason})")
-
-    def translate(self, offset):
-        return self
-
-    def rotate(self, matrix, center=None):
-        return self
-
-    def scale_by(self, factor, center=None):
-        return self
-
-    def offset(self, amount):
-        return self
 
     def shell(self, thickness):
         return self
@@ -107,9 +108,6 @@ class Everything(_Special):
     def _distance(self, points):
         return np.full(len(points), -np.inf)
 
-    def _gradient(self, points):
-        return np.zeros_like(points)
-
     def union(self, *others):
         _dimension(self, others)
         return self
@@ -124,18 +122,6 @@ class Everything(_Special):
 
     def complement(self):
         return Empty(self.dim, "the complement of all of space")
-
-    def translate(self, offset):
-        return self
-
-    def rotate(self, matrix, center=None):
-        return self
-
-    def scale_by(self, factor, center=None):
-        return self
-
-    def offset(self, amount):
-        return self
 
     def shell(self, thickness):
         return Empty(self.dim, "the shell of all of space (it has no boundary)")
