@@ -15,6 +15,8 @@
 #       the unit cube on Warp, before and now (bench/scale.py)
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh spread    threads per moved prototype: a launch's
 #       move_ids alone (bench/step_cost.py) and whole packings with and without (bench/profile_kernels.py)
+#   source .gpu2/setup.sh && bash bench/gpu_issue20.sh deallocs  numba-cuda with its frees flushed after 10
+#       (numba's default) and after 1,000 pending ones (bench/round_time.py)
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh tests     the GPU backends' tests
 set -uo pipefail
 source bench/gpu_header.sh
@@ -48,6 +50,12 @@ case "${1:-time}" in
       --variants now spread-1 threads-2^15 threads-2^16 threads-2^18 threads-2^19 --repeats 2 \
       --out "$OUT/profile_spread_h100.json" 2>&1 | grep -v "^Warp\|^Module" \
       | tee "$OUT/profile_spread.txt" ;;
+  deallocs)  # the eighth steps: numba-cuda's deferred frees (each flush synchronises the device)
+    for count in 10 1000; do
+      NUMBA_CUDA_MAX_PENDING_DEALLOCS_COUNT=$count timeout 250 python3 bench/round_time.py --mesh /tmp/armadillo.obj \
+        --count 100000 --backends numba-cuda --versions now=. --repeats 3 --out "$OUT/round_time_deallocs_$count.json" \
+        2>&1 | grep -v "^Warp\|^Module" | tee "$OUT/round_time_deallocs_$count.txt"
+    done ;;
   tests)
     timeout 570 python3 -m pytest -q -p no:cacheprovider tests/test_backends.py tests/test_scale.py tests/test_driver.py \
       -k "numba-cuda or warp or cuda or fast" 2>&1 | tail -15 | tee "$OUT/tests.txt" ;;

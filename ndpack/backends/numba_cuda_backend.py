@@ -332,11 +332,11 @@ class _CudaDevice:
         import numba
 
         if numba.config.ENABLE_CUDASIM:  # the simulator copies whole arrays: give it slices
-            self._device_to_host = None
+            self._device_to_host = self._memset = None
         else:
-            from numba.cuda.cudadrv.driver import device_to_host
+            from numba.cuda.cudadrv.driver import device_memset, device_to_host
 
-            self._device_to_host = device_to_host
+            self._device_to_host, self._memset = device_to_host, device_memset
 
     def upload(self, host, kind):
         return self.cuda.to_device(np.ascontiguousarray(host, dtype=self.DTYPES[kind]), stream=self.stream)
@@ -347,7 +347,10 @@ class _CudaDevice:
         return self.cuda.device_array(shape, dtype=self.DTYPES[kind], stream=self.stream)
 
     def fill(self, array, value):
-        array.copy_to_device(np.full(array.shape, value, dtype=array.dtype), stream=self.stream)
+        if value == 0 and self._memset is not None:  # no host array, no copy: a launch on the stream
+            self._memset(array, 0, array.nbytes, stream=self.stream)
+        else:
+            array.copy_to_device(np.full(array.shape, value, dtype=array.dtype), stream=self.stream)
 
     def extend(self, array, host, kind):
         longer = self.empty(len(array) + len(host), kind)
