@@ -47,6 +47,10 @@ class Caps:
         return len(self.centres)
 
 
+#: The caps of a closed mesh.
+NONE = Caps(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), np.zeros(0))
+
+
 def boundary_edges(faces: np.ndarray) -> np.ndarray:
     """Directed edges of ``faces`` left without a partner in the opposite direction.
 
@@ -87,7 +91,7 @@ def cap(vertices: np.ndarray, faces: np.ndarray) -> Caps:
     """
     rim = boundary_edges(faces)
     if len(rim) == 0:
-        return Caps(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), np.zeros(0))
+        return NONE
     graph = coo_matrix((np.ones(len(rim)), (rim[:, 0], rim[:, 1])), shape=(len(vertices),) * 2)
     _, labels = connected_components(graph, directed=False)
     pieces, piece = np.unique(labels[rim[:, 0]], return_inverse=True)

@@ -35,7 +35,7 @@ class Surface:
         opposite directions.
     volume : float
         Enclosed volume by the divergence theorem, caps included (exact when nothing crosses).
-    given_faces : int
+    given_count : int
         How many rows of ``faces`` are the given mesh's (the rest are caps).
     holes : int
         Holes capped.
@@ -49,7 +49,7 @@ class Surface:
     faces: np.ndarray
     closed: bool
     volume: float
-    given_faces: int
+    given_count: int
     holes: int = 0
     largest_hole: float = 0.0
     notes: list[str] = field(default_factory=list)
@@ -190,7 +190,7 @@ def prepare(vertices, faces, holes: str = "cap") -> Surface:
                      else "could not make the triangles' orientation consistent (non-manifold edges)")
     closed = bool(mesh.is_watertight and mesh.is_winding_consistent)
     given = len(mesh.faces)
-    caps = hole_caps.cap(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+    caps = hole_caps.cap(np.asarray(mesh.vertices), np.asarray(mesh.faces)) if not closed else hole_caps.NONE
     if caps.count and holes == "refuse":
         raise ShapeError(
             f"the mesh is open: {caps.count} {'hole' if caps.count == 1 else 'holes'} (the largest "

@@ -75,9 +75,10 @@ class TriangleMesh(Oracle):
     closed surface that does not cross itself that is the solid it bounds, and the distance is exact
     (``exact_inside``). For a surface that crosses itself (or is not a manifold), inside is the
     union of the regions it wraps at least once, and the distance, to every triangle (inner sheets
-    too), is a lower bound, which keeps spheres inside. An open mesh is inside its caps: where a
-    hole's rim is planar that is also where the given triangles' winding number exceeds 1/2; where it
-    is not, the cap (a cone to the rim's centre) decides near the hole.
+    too), is a lower bound, which keeps spheres inside. An open mesh is what its caps close: for
+    one hole with a planar rim that is also where the given triangles' own winding number exceeds
+    1/2, but with several holes, or a rim off its plane, that number can fall below 1/2 inside
+    the caps (each hole takes its solid angle from it), so the caps are the definition.
 
     Every tolerance of the cleaning (welding, triangles without area, the flatness and volume
     checks) is relative to the mesh's size: a mesh scaled by any factor is cleaned the same way.
@@ -91,7 +92,7 @@ class TriangleMesh(Oracle):
             raise ShapeError(f"sign must be one of {surface.SIGN_METHODS}, got {sign!r}")
         prepared = surface.prepare(vertices, faces, "cap" if holes is None else holes)
         self.vertices, self.faces, self.closed = prepared.vertices, prepared.faces, prepared.closed
-        self.given_faces = self.faces[:prepared.given_faces]
+        self.given_faces = self.faces[:prepared.given_count]
         self.holes = prepared.holes
         self.notes = list(prepared.notes)
         self.name = name
