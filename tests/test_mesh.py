@@ -281,6 +281,11 @@ def test_cleaning_and_packing_do_not_depend_on_the_units(tmp_path):
         else:  # rounding differs, and the iterations carry it to ~1e-9 (measured: 1.4e-9 at most)
             np.testing.assert_allclose(packing.centers / scale, expected.centers, rtol=0, atol=1e-7)
             np.testing.assert_allclose(packing.radii / scale, expected.radii, rtol=1e-7)
+    # Far from the origin (1e5 sizes away) too: the cleaning happens around the mesh's centre.
+    given = soup * 1e-8 + 1e-3
+    moved = nd.TriangleMesh(given, faces)
+    assert moved.notes == reference.notes and np.array_equal(moved.faces, reference.faces)
+    assert (moved.vertices[:, None] == given[None]).all(axis=2).any(axis=1).all()  # given vertices, bit for bit
     # A file is cleaned the same way: trimesh's own processing (absolute tolerances) is not used.
     path = tmp_path / "tiny.obj"  # written in full precision (trimesh's PLY is float32, its OBJ fixed-point)
     path.write_text("".join(f"v {x:.17g} {y:.17g} {z:.17g}\n" for x, y, z in soup * 1e-8)

@@ -146,20 +146,25 @@ def prepare(vertices, faces, holes: str = "cap") -> Surface:
     no volume, or is open and ``holes="refuse"``.
 
     Every tolerance is relative to the mesh's size: trimesh's (welding at 1e-8, triangles thinner
-    than 1e-8 dropped) apply to the vertices divided by a power of two near the mesh's extent, so
-    that a mesh and its copy scaled by any factor come out the same, and the division is exact.
+    than 1e-8 dropped) apply to the vertices moved to the centre of their box and divided by a
+    power of two near the mesh's extent, so that a mesh and its copy moved or scaled by any factor
+    are cleaned the same way. The vertices kept are the given ones, bit for bit.
     """
     import trimesh
 
     if holes not in HOLE_OPTIONS:
         raise ShapeError(f"holes must be one of {HOLE_OPTIONS}, got {holes!r}")
     vertices, faces = check_arrays(vertices, faces)
-    extent = float(np.ptp(vertices[np.unique(faces)], axis=0).max())
+    used = vertices[np.unique(faces)]
+    lower, upper = used.min(axis=0), used.max(axis=0)
+    extent = float((upper - lower).max())
     if extent == 0:
         raise ShapeError("the mesh has no volume: all its triangles' vertices are the same point")
-    unit = 2.0 ** np.floor(np.log2(extent))  # exact: a power of two
+    centre, unit = 0.5 * (lower + upper), 2.0 ** np.floor(np.log2(extent))
     notes = []
-    mesh = trimesh.Trimesh(vertices / unit, faces, process=False)
+    mesh = trimesh.Trimesh((vertices - centre) / unit, faces, process=False)
+    # Each kept vertex's row in `vertices` (trimesh carries vertex attributes through its edits).
+    mesh.vertex_attributes["given"] = np.arange(len(vertices))
     count = len(mesh.vertices)
     mesh.merge_vertices(merge_tex=True, merge_norm=True)
     if len(mesh.vertices) < count:
@@ -190,6 +195,7 @@ def prepare(vertices, faces, holes: str = "cap") -> Surface:
                      else "could not make the triangles' orientation consistent (non-manifold edges)")
     closed = bool(mesh.is_watertight and mesh.is_winding_consistent)
     given = len(mesh.faces)
+    kept = vertices[mesh.vertex_attributes["given"]]
     caps = hole_caps.cap(np.asarray(mesh.vertices), np.asarray(mesh.faces)) if not closed else hole_caps.NONE
     if caps.count and holes == "refuse":
         raise ShapeError(
@@ -204,6 +210,7 @@ def prepare(vertices, faces, holes: str = "cap") -> Surface:
         flat = ~np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]).any(axis=1)
         mesh = trimesh.Trimesh(np.vstack([mesh.vertices, caps.centres]),
                                np.vstack([mesh.faces, caps.faces[~flat]]), process=False)
+        kept = np.vstack([kept, caps.centres * unit + centre])
         notes.append(
             f"capped {caps.count} {'hole' if caps.count == 1 else 'holes'} with {int((~flat).sum())} triangles "
             f"(fans to each rim's centre; the largest hole {caps.sizes.max() * unit:.3g} across)")
@@ -214,6 +221,6 @@ def prepare(vertices, faces, holes: str = "cap") -> Surface:
     if volume < 0:
         mesh.invert()
         notes.append("turned the triangles outward (they faced inward)")
-    return Surface(np.asarray(mesh.vertices, dtype=np.float64) * unit, np.asarray(mesh.faces, dtype=np.int64),
+    return Surface(kept, np.asarray(mesh.faces, dtype=np.int64),
                    closed, abs(volume) * unit**3, given, caps.count,
                    float(caps.sizes.max(initial=0.0)) * unit, notes)
