@@ -138,7 +138,9 @@ class TriangleMesh(Oracle):
         points = lower + (upper - lower) * np.random.default_rng(0).random((SIGN_CHECK_SAMPLES, 3))
         distance = queries.signed_distance(self._block, points)  # the block still says pseudo-normals
         winding = queries.winding_number(self._block, points)
-        clear = np.abs(distance) > 1e-6 * self.scale
+        # Clear of the surface by a millionth of the mesh's size (not of `scale`, which grows with
+        # the distance from the origin), and by more than float64 rounding at its coordinates.
+        clear = np.abs(distance) > max(1e-6 * float(np.ptp(self._bounds, axis=0).max()), 1e-12 * self.scale)
         return int(np.count_nonzero(clear & ((distance < 0) != (winding > 0.5))))
 
     # ------------------------------------------------------------------ constructors
