@@ -114,6 +114,10 @@ def _option(text: str) -> tuple:
     return key.strip(), int(value) if value.strip().lstrip("-").isdigit() else value
 
 
+#: The help of --holes, which pack, verify and render share.
+HOLES_HELP = "an open mesh file: cap closes each hole with a fan of triangles (the default, with a warning), refuse exits"
+
+
 def _parser() -> argparse.ArgumentParser:
     from .builtin import BUILTIN
     from .formats import table
@@ -131,6 +135,7 @@ def _parser() -> argparse.ArgumentParser:
     pack.add_argument("shape", nargs="?", default="demo",
                       help="built-in spec, mesh file, .py script or module:function (default: demo)")
     pack.add_argument("--dim", type=int, help="dimension of a built-in shape (same as :dim=)")
+    pack.add_argument("--holes", choices=("cap", "refuse"), help=HOLES_HELP)
     pack.add_argument("-n", "--count", type=int, default=1000, help="number of spheres (default 1000)")
     pack.add_argument("-o", "--output", help="write the packing here; the suffix picks the format")
     pack.add_argument("--format", help="the output format where the suffix does not say (e.g. curobo, medial)")
@@ -158,6 +163,10 @@ def _parser() -> argparse.ArgumentParser:
     verify.add_argument("packing", help="a packing file (.npz, .csv, .json, ...)")
     verify.add_argument("--shape", help="the shape to check against (default: the one the file records)")
     verify.add_argument("--tol", type=_nonnegative, help="overlap and containment tolerance, >= 0 (default: ndpack's)")
+    verify.add_argument("--holes", choices=("cap", "refuse"), help=HOLES_HELP)
+    verify.add_argument("--independent", action="store_true",
+                        help="a mesh: also check 48 points on each sphere by the exact winding number, summed "
+                        "over every triangle (slow: points x triangles)")
     verify.add_argument("--trust-source", action="store_true",
                         help="run the script or module the file records as its shape (only for files you trust)")
 
@@ -174,6 +183,7 @@ def _parser() -> argparse.ArgumentParser:
     render.add_argument("--at", type=_numbers, help="a point of the slice (default: the centres' mean)")
     render.add_argument("--clip", type=_numbers, help="px,py,pz,nx,ny,nz: drop spheres beyond this plane")
     render.add_argument("--shape", help="the shape whose outline a slice draws (default: the recorded one)")
+    render.add_argument("--holes", choices=("cap", "refuse"), help=HOLES_HELP)
     render.add_argument("--trust-source", action="store_true",
                         help="run the script or module the file records as its shape (only for files you trust)")
 
@@ -193,7 +203,7 @@ def _pack(args) -> int:
     source = args.shape
     if args.dim is not None:
         source += ("," if ":" in source else ":") + f"dim={args.dim}"
-    shape = load_shape(source)
+    shape = load_shape(source, args.holes)
     options = dict(args.option)
     if args.output:
         _check_output(args.output, args.format, shape.dim, options)
@@ -285,7 +295,7 @@ def _load(path: str):
     return load(path)
 
 
-def _recorded_shape(packing, override: str | None, required: bool, trust: bool = False):
+def _recorded_shape(packing, override: str | None, required: bool, trust: bool = False, holes: str | None = None):
     """The shape given on the command line, else the one the packing records (``params["source"]``).
 
     A recorded source that would run code (a script, a module, a package's plug-in) is used
@@ -294,7 +304,7 @@ def _recorded_shape(packing, override: str | None, required: bool, trust: bool =
     from .sources import code_in, load_shape
 
     if override:
-        return load_shape(override)
+        return load_shape(override, holes)
     source = packing.params.get("source")
     if source is None:
         if required:
@@ -309,15 +319,15 @@ def _recorded_shape(packing, override: str | None, required: bool, trust: bool =
         print(f"ndpack: drawn without the outline: the packing records its shape as {code}; {advice}",
               file=sys.stderr)
         return None
-    return load_shape(str(source))
+    return load_shape(str(source), holes)
 
 
 def _verify(args) -> int:
     from .verify import verify
 
     packing = _load(args.packing)
-    shape = _recorded_shape(packing, args.shape, required=True, trust=args.trust_source)
-    report = verify(packing, shape, args.tol)
+    shape = _recorded_shape(packing, args.shape, required=True, trust=args.trust_source, holes=args.holes)
+    report = verify(packing, shape, args.tol, independent=args.independent)
     print(f"{args.packing}: {len(packing)} spheres in {packing.dim}-D against {shape!r}")
     print(f"verified: {report.summary()}")
     return 0 if report.ok else 1
@@ -346,7 +356,7 @@ def _render(args) -> int:
     elif draws_circles:
         _refuse({name: options[name] for name in ("size", "view", "clip") if name in options},
                 "a picture of circles (2-D, a slice, .svg or .pdf)")
-        shape = _recorded_shape(packing, args.shape, required=False, trust=args.trust_source)
+        shape = _recorded_shape(packing, args.shape, required=False, trust=args.trust_source, holes=args.holes)
         if shape is not None:
             options["shape"] = shape
     print(f"wrote {picture(packing, output, kind=kind, **options)}")

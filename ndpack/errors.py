@@ -39,7 +39,8 @@ class KernelError(NdpackError, TypeError):
 
 
 class MeshWarning(UserWarning):
-    """A mesh was repaired, or its inside is decided by a method that can be wrong near its holes."""
+    """A mesh was repaired in a way that changes its shape (its holes capped), or a sign method that
+    can be wrong was asked for."""
 
 
 class GridWarning(UserWarning):

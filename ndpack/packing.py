@@ -110,11 +110,11 @@ class Packing:
         """Standard error of :attr:`fill` from the volume estimate (0 when the volume is exact)."""
         return self.fill * self.volume_error / self.volume
 
-    def verify(self, shape=None, tol: float | None = None):
+    def verify(self, shape=None, tol: float | None = None, independent: bool = False):
         """Check validity in float64; see :func:`ndpack.verify`."""
         from .verify import verify
 
-        return verify(self, shape, tol)
+        return verify(self, shape, tol, independent=independent)
 
     def plot(self, shape=None, ax=None, axes=(0, 1), at=None):
         """Draw the packing (2-D) or a slice of it; see :func:`ndpack.plot.plot`."""

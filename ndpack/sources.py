@@ -30,8 +30,15 @@ from .errors import ShapeError
 MESH_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".3mf", ".dae")
 
 
-def load_shape(source: str):
+def load_shape(source: str, holes: str | None = None):
     """The shape a source string names; see the module's table.
+
+    Parameters
+    ----------
+    source : str
+    holes : {"cap", "refuse"}, optional
+        For a mesh file: what to do with an open mesh (:class:`~ndpack.TriangleMesh`); refused
+        for other sources, whose code builds the shape.
 
     Returns
     -------
@@ -44,6 +51,9 @@ def load_shape(source: str):
     if not text:
         raise ShapeError("the shape is empty: name a built-in shape (e.g. box:dim=3), a mesh file or a script")
     kind = _kind(text)
+    if holes is not None and kind != "mesh":
+        raise ShapeError(f"--holes applies to a mesh file, and {text} is not one: leave it out "
+                         "(a script passes holes= to ndpack.TriangleMesh itself)")
     path = Path(text).expanduser()
     if path.is_dir():
         raise ShapeError(f"{text} is a folder, not a mesh file or a script")
@@ -54,7 +64,7 @@ def load_shape(source: str):
     if kind == "mesh":
         from .shapes.mesh import TriangleMesh
 
-        return TriangleMesh.load(path)
+        return TriangleMesh.load(path, holes=holes)
     if kind == "spec":
         return from_spec(text)
     name, _, attribute = text.partition(":")

@@ -3,6 +3,11 @@
 Containment uses the shape's own oracle, which is conservative (see :mod:`ndpack.oracle`), so a
 sphere that passes is truly inside. Overlaps are found with SciPy k-d trees, one per octave of
 radius, so that a few large spheres do not make every query reach across the whole packing.
+
+For a triangle mesh, ``independent=True`` adds a check that shares nothing with the oracle's
+queries: points spread over each sphere are classified by the exact winding number of the mesh's
+triangles (caps included), summed in NumPy (:mod:`ndpack.meshes.solid_angles`) instead of walked
+in the tree with a far-field approximation, and without the sign method the packing used.
 """
 
 from __future__ import annotations
@@ -14,12 +19,15 @@ import itertools
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .errors import DimensionError, NdpackError
+from .errors import DimensionError, NdpackError, ParameterError
 from .oracle import as_points
 
 #: Default tolerance, as a fraction of the shape's scale: float64 rounding of distances is about
 #: 1e-16 of it, and the driver keeps a margin of 1e-10 (ndpack.protosphere.SAFETY_MARGIN).
 DEFAULT_TOLERANCE = 1e-12
+#: Points per sphere of the independent check: a few dozen find a sphere that reaches through a
+#: hole by a fraction of its radius.
+SAMPLES_PER_SPHERE = 48
 
 
 @dataclass
@@ -42,6 +50,8 @@ class Verification:
         Spheres that poke out by more than ``tol``.
     overlapping : (k, 2) int64
         Pairs that overlap by more than ``tol``.
+    samples_outside : (k,) int64 or None
+        Spheres with a point outside by the independent check (None where it did not run).
     """
 
     ok: bool
@@ -51,16 +61,21 @@ class Verification:
     worst_overlap: float
     outside: np.ndarray = field(repr=False)
     overlapping: np.ndarray = field(repr=False)
+    samples_outside: np.ndarray | None = field(default=None, repr=False)
 
     def __bool__(self) -> bool:
         return self.ok
 
     def summary(self) -> str:
         verdict = "valid" if self.ok else "INVALID"
+        independent = ""
+        if self.samples_outside is not None:
+            independent = (f"; independent check: {len(self.samples_outside)} spheres with points outside by the "
+                           f"exact winding number ({SAMPLES_PER_SPHERE} points each)")
         return (
             f"{verdict}: {self.count} spheres, {len(self.outside)} outside, "
             f"{len(self.overlapping)} overlapping pairs (worst poke-out {self.worst_containment:.3g}, "
-            f"worst overlap {self.worst_overlap:.3g}, tolerance {self.tol:.3g})"
+            f"worst overlap {self.worst_overlap:.3g}, tolerance {self.tol:.3g}){independent}"
         )
 
     __str__ = summary
@@ -121,7 +136,7 @@ def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0):
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))], float(overlap.max())
 
 
-def verify(packing, shape=None, tol: float | None = None, radii=None) -> Verification:
+def verify(packing, shape=None, tol: float | None = None, radii=None, independent: bool = False) -> Verification:
     """Check a packing in float64: every sphere inside ``shape``, no two overlapping.
 
     Parameters
@@ -134,6 +149,12 @@ def verify(packing, shape=None, tol: float | None = None, radii=None) -> Verific
         Absolute tolerance; default ``1e-12 * shape.scale``.
     radii : (n,) array_like, optional
         Radii when ``packing`` is an array of centres.
+    independent : bool
+        For a :class:`~ndpack.TriangleMesh`: also check 48 points spread over each sphere (its
+        radius less ``tol``) by the exact winding number of the mesh's triangles, caps included,
+        summed in NumPy (:meth:`~ndpack.TriangleMesh.exact_winding_number`), which shares no code
+        with the oracle's distance or sign: a point counts as outside where it is not above 1/2.
+        Costs points x triangles.
 
     Returns
     -------
@@ -163,15 +184,41 @@ def verify(packing, shape=None, tol: float | None = None, radii=None) -> Verific
         )
     if len(radii) == 0:
         return Verification(True, 0, tol, -np.inf, -np.inf, np.zeros(0, np.int64), np.zeros((0, 2), np.int64))
+    samples_outside = _independent_check(shape, centers, radii, tol) if independent else None
     poke_out = shape._distance(centers) + radii
     outside = np.flatnonzero(~(poke_out <= tol))  # NaN counts as outside
     pairs, worst_overlap = overlapping_pairs(centers, radii, tol)
     return Verification(
-        ok=len(outside) == 0 and len(pairs) == 0,
+        ok=len(outside) == 0 and len(pairs) == 0 and (samples_outside is None or len(samples_outside) == 0),
         count=len(radii),
         tol=tol,
         worst_containment=float(np.nanmax(poke_out)),
         worst_overlap=worst_overlap,
         outside=outside,
         overlapping=pairs,
+        samples_outside=samples_outside,
     )
+
+
+def _independent_check(shape, centers: np.ndarray, radii: np.ndarray, tol: float) -> np.ndarray:
+    """(k,) the spheres with a point of their surface (less ``tol``) outside by the shape's
+    independent inside test (the exact winding number of a mesh)."""
+    winding = getattr(shape, "exact_winding_number", None)
+    if winding is None:
+        raise ParameterError(f"independent=True checks triangle meshes (ndpack.TriangleMesh) only, not {shape!r}; "
+                             "leave it out for other shapes")
+    if len(radii) == 0:
+        return np.zeros(0, dtype=np.int64)
+    directions = sphere_directions(SAMPLES_PER_SPHERE)
+    points = centers[:, None, :] + np.maximum(radii - tol, 0.0)[:, None, None] * directions  # (n, k, 3)
+    inside = winding(points.reshape(-1, 3)).reshape(len(radii), -1) > 0.5
+    return np.flatnonzero(~inside.all(axis=1))
+
+
+def sphere_directions(count: int) -> np.ndarray:
+    """(count, 3) unit vectors spread evenly over the sphere (a Fibonacci lattice): deterministic."""
+    k = np.arange(count) + 0.5
+    height = 1.0 - 2.0 * k / count
+    angle = np.pi * (1.0 + np.sqrt(5.0)) * k
+    ring = np.sqrt(1.0 - height**2)
+    return np.column_stack([ring * np.cos(angle), ring * np.sin(angle), height])

@@ -339,3 +339,25 @@ def test_numeric_options_and_unreadable_files_give_one_line(saved_square, tmp_pa
     noise.write_bytes(np.random.default_rng(0).bytes(2000))
     line = one_line_error(run("info", str(noise)), "never loads")
     assert "allow_pickle" not in line and "pickle.load" not in line
+
+
+def test_an_open_mesh_file_is_capped_or_refused(tmp_path, capsys):
+    import trimesh
+
+    from ndpack.cli import main
+
+    def error_line(*argv):  # in process: five subprocesses would cost 10 s
+        assert main(list(argv)) == 2
+        return capsys.readouterr().err.strip()
+
+    box = trimesh.creation.box()
+    path = tmp_path / "open.stl"
+    trimesh.Trimesh(box.vertices, box.faces[box.face_normals[:, 0] < 0.9], process=False).export(path)
+    assert error_line("pack", str(path), "--holes", "refuse").startswith("ndpack: error: the mesh is open: 1 hole")
+    out = tmp_path / "open.npz"
+    assert main(["pack", str(path), "--holes", "cap", "-n", "10", "--grid", "8", "-o", str(out), "-q"]) == 0
+    with pytest.warns(nd.MeshWarning, match="open .1 hole"):  # rebuilt from the file with the default: cap
+        assert main(["verify", str(out), "--independent"]) == 0
+    assert "independent check: 0 spheres with points outside" in capsys.readouterr().out
+    assert "the mesh is open: 1 hole" in error_line("verify", str(out), "--holes", "refuse")
+    assert "--holes applies to a mesh file" in error_line("verify", str(out), "--shape", "box", "--holes", "cap")

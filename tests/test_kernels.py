@@ -424,14 +424,14 @@ def test_the_nearest_feature_search_given_a_hint_or_a_bound_finds_the_same_featu
     """The search's pruning changes nothing it finds: from any hint the nearest feature is the
     unhinted one; with a bound, a closed surface reports -2 exactly where the boundary lies
     farther than the bound, and the same feature elsewhere. A mesh signed by winding numbers
-    (not closed) has no such guarantee and ignores the bound."""
+    (here an open one, closed by its cap) ignores the bound."""
     import trimesh
 
     rng = np.random.default_rng(5)
     closed = nd.TriangleMesh.from_trimesh(trimesh.creation.icosphere(subdivisions=2))
     outline = nd.Polygon([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 0.4], [0.0, 1.0]])
     sphere = trimesh.creation.icosphere(subdivisions=2)
-    open_mesh = nd.TriangleMesh(sphere.vertices, sphere.faces[1:], sign="winding")  # not closed
+    open_mesh = nd.TriangleMesh(sphere.vertices, sphere.faces[1:], holes="cap")  # capped: winding numbers
     for shape in (closed, outline, open_mesh):
         lower, upper = shape.bounds
         points = lower + (upper - lower) * rng.random((400, shape.dim))

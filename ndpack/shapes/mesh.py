@@ -6,7 +6,10 @@ The unsigned distance is exact: a bounding-volume hierarchy finds the nearest tr
 - ``"pseudonormal"``: the angle-weighted pseudo-normal of the nearest feature (face, edge or
   vertex). Exact and fast, for closed, consistently oriented surfaces that do not cross themselves.
 - ``"winding"``: the generalised winding number above 1/2 (hierarchical, first order). Robust for
-  open meshes (scans with holes), surfaces that cross themselves, and leftover seams.
+  surfaces that cross themselves, non-manifold edges, and meshes whose holes were capped.
+
+An open mesh (a scan with holes) is closed first: each hole's rim gets a fan of triangles to its
+centre (:mod:`ndpack.meshes.holes`), so that the distance, not only the sign, respects the holes.
 
 The distance is computed in coordinates normalised to the mesh's box, so float32 backends (Warp)
 keep their precision; every result is in the user's units.
@@ -19,7 +22,7 @@ import warnings
 import numpy as np
 
 from ..errors import MeshWarning, ShapeError
-from ..meshes import kernels, layout, queries, surface
+from ..meshes import kernels, layout, queries, solid_angles, surface
 from ..oracle import Oracle, as_points, unit_rows
 
 #: Points sampled to compare the two sign methods on a closed mesh: where they disagree away from
@@ -38,18 +41,29 @@ class TriangleMesh(Oracle):
         repeated triangles dropped, and the orientation made consistent and outward.
     sign : {"auto", "pseudonormal", "winding"}
         How inside is decided. ``"auto"`` takes pseudo-normals for a closed surface that passes the
-        self-crossing check, else the winding number (with a :class:`~ndpack.MeshWarning` for an
-        open mesh).
+        self-crossing check, else the winding number (always for a mesh whose holes were capped:
+        a cap may fold over itself or cross the surface, which pseudo-normals get wrong).
     name : str, optional
         Shown in ``repr`` (the file name for :meth:`load`).
+    holes : {"cap", "refuse"}, optional
+        What to do with an open mesh (edges of one triangle only, or rims of any kind). ``"cap"``
+        closes each hole with a fan of triangles from its rim to the rim's centre, and the caps are
+        part of the surface from then on (distance and sign); ``"refuse"`` raises
+        :class:`~ndpack.ShapeError`. Default: cap, with a :class:`~ndpack.MeshWarning` that says
+        what was capped (pass ``holes="cap"`` to silence it).
 
     Attributes
     ----------
     vertices : (v, 3) float64
     faces : (f, 3) int64
-        The cleaned mesh the distances are computed to.
+        The cleaned mesh the distances are computed to: the given triangles first, then the caps
+        of its holes (whose centres are the last vertices).
+    given_faces : (g, 3) int64
+        The rows of ``faces`` that came with the mesh (cleaned and oriented, without the caps).
     closed : bool
-        Whether every edge joins exactly two consistently oriented triangles.
+        Whether the given mesh had every edge join exactly two consistently oriented triangles.
+    holes : int
+        Holes capped (0 for a closed mesh).
     sign_method : str
         ``"pseudonormal"`` or ``"winding"``.
     notes : list of str
@@ -57,46 +71,57 @@ class TriangleMesh(Oracle):
 
     Notes
     -----
-    Inside a closed mesh the distance is exact (``exact_inside``). With the winding number on a
-    closed surface that crosses itself, the distance is to every triangle, the inner sheets too, so
-    it is a lower bound. On an open mesh the inside is the region of winding number above 1/2, and
-    the distance ignores the holes: a sphere next to a hole may reach through it by up to the hole's
-    size. Close such meshes first where that matters.
+    Inside means: where the generalised winding number of the (capped) surface exceeds 1/2. For a
+    closed surface that does not cross itself that is the solid it bounds, and the distance is exact
+    (``exact_inside``). For a surface that crosses itself (or is not a manifold), inside is the
+    union of the regions it wraps at least once, and the distance, to every triangle (inner sheets
+    too), is a lower bound, which keeps spheres inside. An open mesh is what its caps close: for
+    one hole with a planar rim that is also where the given triangles' own winding number exceeds
+    1/2, but with several holes, or a rim off its plane, that number can fall below 1/2 inside
+    the caps (each hole takes its solid angle from it), so the caps are the definition.
+
+    Every tolerance of the cleaning (welding, triangles without area, the flatness and volume
+    checks) is relative to the mesh's size: a mesh scaled by any factor is cleaned the same way.
     """
 
     dim = 3
     convex = False
 
-    def __init__(self, vertices, faces, sign: str = "auto", name: str | None = None):
+    def __init__(self, vertices, faces, sign: str = "auto", name: str | None = None, holes: str | None = None):
         if sign not in surface.SIGN_METHODS:
             raise ShapeError(f"sign must be one of {surface.SIGN_METHODS}, got {sign!r}")
-        prepared = surface.prepare(vertices, faces)
+        prepared = surface.prepare(vertices, faces, "cap" if holes is None else holes)
         self.vertices, self.faces, self.closed = prepared.vertices, prepared.faces, prepared.closed
+        self.given_faces = self.faces[:prepared.given_count]
+        self.holes = prepared.holes
         self.notes = list(prepared.notes)
         self.name = name
         self._bounds = np.array([self.vertices.min(axis=0), self.vertices.max(axis=0)])
         # Built for pseudo-normals first; the sign method is one number in the header.
         self._block, self._order = layout.pack_mesh(self.vertices, self.faces, "pseudonormal")
+        if self.holes and holes is None:
+            many = "holes, the largest" if self.holes > 1 else "hole,"
+            warnings.warn(
+                f"{self!r} is open ({self.holes} {many} {prepared.largest_hole:.3g} across): each hole is closed by "
+                "a cap, a fan of triangles to its rim's centre, and spheres stay inside the caps; pass holes='cap' "
+                "to silence this, or holes='refuse' to refuse open meshes", MeshWarning, stacklevel=2)
         self.sign_method = self._choose_sign(sign)
         self._block[1] = layout.SIGN_CODES[self.sign_method]
         self.exact_inside = self.exact_outside = self.sign_method == "pseudonormal"
-        self._volume = prepared.volume if self.closed else None
+        self._volume = prepared.volume
 
     def _choose_sign(self, asked: str) -> str:
-        where = f"{self!r}"
-        if not self.closed:
+        if self.holes:
             if asked == "pseudonormal":
-                warnings.warn(f"{where} is open; pseudo-normal signs are wrong near its holes (asked for anyway)",
-                              MeshWarning, stacklevel=3)
+                warnings.warn(f"{self!r}: pseudo-normal signs are wrong where a cap of a hole folds over (a rim "
+                              "that is not planar and convex); asked for anyway", MeshWarning, stacklevel=3)
                 return asked
-            self.notes.append("open surface: inside where the winding number exceeds 1/2")
-            if asked == "winding":
-                return asked  # chosen knowingly: no warning
-            warnings.warn(
-                f"{where} is not closed (it has holes or unwelded seams): inside is decided by the generalised "
-                "winding number, and spheres next to a hole may reach through it; pass sign='winding' to "
-                "silence this, or close the mesh", MeshWarning, stacklevel=3)
+            self.notes.append("capped surface: inside where the winding number exceeds 1/2")
             return "winding"
+        if not self.closed:
+            self.notes.append("not a manifold surface (edges of more than two triangles, or orientations that "
+                              "cannot agree): inside where the winding number exceeds 1/2")
+            return "winding" if asked == "auto" else asked
         if asked != "auto":
             return asked
         disagree = self._sign_disagreements()
@@ -113,22 +138,25 @@ class TriangleMesh(Oracle):
         points = lower + (upper - lower) * np.random.default_rng(0).random((SIGN_CHECK_SAMPLES, 3))
         distance = queries.signed_distance(self._block, points)  # the block still says pseudo-normals
         winding = queries.winding_number(self._block, points)
-        clear = np.abs(distance) > 1e-6 * self.scale
+        # Clear of the surface by a millionth of the mesh's size (not of `scale`, which grows with
+        # the distance from the origin), and by more than float64 rounding at its coordinates.
+        clear = np.abs(distance) > max(1e-6 * float(np.ptp(self._bounds, axis=0).max()), 1e-12 * self.scale)
         return int(np.count_nonzero(clear & ((distance < 0) != (winding > 0.5))))
 
     # ------------------------------------------------------------------ constructors
     @classmethod
-    def load(cls, path, sign: str = "auto") -> TriangleMesh:
-        """Read a mesh file (anything trimesh reads: STL, OBJ, PLY, OFF, GLB, ...)."""
+    def load(cls, path, sign: str = "auto", holes: str | None = None) -> TriangleMesh:
+        """Read a mesh file (anything trimesh reads: STL, OBJ, PLY, OFF, GLB, ...); ``sign`` and
+        ``holes`` as for the class."""
         import os
 
         mesh = surface.read(path)
-        return cls(mesh.vertices, mesh.faces, sign=sign, name=os.path.basename(os.fspath(path)))
+        return cls(mesh.vertices, mesh.faces, sign=sign, name=os.path.basename(os.fspath(path)), holes=holes)
 
     @classmethod
-    def from_trimesh(cls, mesh, sign: str = "auto") -> TriangleMesh:
-        """Wrap a ``trimesh.Trimesh``."""
-        return cls(mesh.vertices, mesh.faces, sign=sign)
+    def from_trimesh(cls, mesh, sign: str = "auto", holes: str | None = None) -> TriangleMesh:
+        """Wrap a ``trimesh.Trimesh`` (``sign`` and ``holes`` as for the class)."""
+        return cls(mesh.vertices, mesh.faces, sign=sign, holes=holes)
 
     # ------------------------------------------------------------------ queries
     @property
@@ -162,6 +190,25 @@ class TriangleMesh(Oracle):
     def winding_number(self, points) -> np.ndarray:
         """(n,) generalised winding numbers: about 1 inside, 0 outside (fast, first-order accurate)."""
         return queries.winding_number(self._block, as_points(points, 3))
+
+    def exact_winding_number(self, points, caps: bool = True) -> np.ndarray:
+        """(n,) exact winding numbers of ``points`` (n, 3), summed over every triangle in NumPy.
+
+        Nothing is shared with the packing's queries (no tree, no far-field approximation, no
+        compiled code: :mod:`ndpack.meshes.solid_angles`), which makes it the independent check of
+        :func:`ndpack.verify` (``independent=True``). Slow: points x triangles.
+
+        Parameters
+        ----------
+        points : (n, 3) array_like
+        caps : bool
+            Count the caps of the holes (the surface whose inside the packing fills), or only the
+            given triangles. The two agree for a mesh with one planar hole; with several holes the
+            given triangles' winding number may fall below 1/2 inside the caps, as each hole takes
+            its solid angle from it.
+        """
+        faces = self.faces if caps else self.given_faces
+        return solid_angles.winding_number(self.vertices[faces], as_points(points, 3))
 
     # ------------------------------------------------------------------ oracle
     def _distance(self, points: np.ndarray) -> np.ndarray:
