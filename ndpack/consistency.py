@@ -19,7 +19,7 @@ import warnings
 
 import numpy as np
 
-from .errors import KEPT_IN_ERROR, InvalidPackingError, RepairWarning
+from .errors import KEPT_IN_ERROR, InvalidPackingError, RepairWarning, ShapeError
 from .shapes.plugin import SHORTEST_PAIR, SLOPE_TOLERANCE, Function, steepest_on_rays, tree
 from .verify import DEFAULT_TOLERANCE
 
@@ -117,7 +117,7 @@ def has_plugin(shape) -> bool:
     return any(isinstance(node, Function) for node in tree(shape))
 
 
-def ensure_possible(packing, shape, on_invalid: str = "repair"):
+def ensure_possible(packing, shape, on_invalid: str = "repair", margin: float = 0.0):
     """The driver's last check: a packing whose spheres are impossible is never returned as made.
 
     Spheres across which a plug-in's distance is steep (:func:`steep_spheres`) are dropped
@@ -132,12 +132,20 @@ def ensure_possible(packing, shape, on_invalid: str = "repair"):
         Already verified (and repaired) against ``shape``.
     shape : Oracle
     on_invalid : {"repair", "raise"}
+    margin : float
+        The run's safety margin (absolute): a shape with room for no sphere above it is refused.
 
     Returns
     -------
     Packing
         ``packing``, or a copy without the steep spheres.
     """
+    if len(packing) == 0 and packing.stop_reason == "no_room":
+        raise ShapeError(
+            f"no sphere fits in {shape!r}: every clearance found is below the safety margin, {margin:.3g} (for a "
+            f"shape whose scale, its largest coordinate or extent, is {shape.scale:.3g}), which keeps rounding from "
+            "making spheres overlap; the shape is too small for where it lies: move it nearer the origin "
+            "(translate) or scale it up")
     if has_plugin(shape):
         indices, slopes, first, second = steep_spheres(packing, shape)
         if len(indices):

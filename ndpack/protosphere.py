@@ -665,7 +665,7 @@ def _ensure_valid(packing: Packing, shape: Oracle, margin: float, precision: str
     """
     report = verify(packing, shape)
     if report.ok:
-        return ensure_possible(packing, shape, on_invalid)
+        return ensure_possible(packing, shape, on_invalid, margin)
     if precision != "float64":
         cause = f"the {precision} backend's rounding exceeded its safety margin"
     else:
@@ -707,4 +707,4 @@ def _ensure_valid(packing: Packing, shape: Oracle, margin: float, precision: str
     report = verify(packing, shape)
     if not report.ok:  # shrinking can only help; this is a last line of defence
         raise ShapeError(f"could not repair the packing: {report.summary()}")
-    return ensure_possible(packing, shape, on_invalid)
+    return ensure_possible(packing, shape, on_invalid, margin)
