@@ -15,7 +15,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from .errors import NdpackError, ParameterError
+from .errors import KEPT_IN_ERROR, InvalidPackingError, NdpackError, ParameterError
 
 PACK_EXAMPLES = """examples:
   ndpack pack                                   # the 3-D demo part, 1000 spheres
@@ -210,7 +210,8 @@ def _pack(args) -> int:
     elif options or args.format:
         raise ParameterError("--format and --option describe the output file: give it with -o PATH")
     started = time.perf_counter()
-    packing = pack(
+    packing = _pack_keeping_invalid(
+        pack, args.output,
         shape,
         n=args.count,
         min_radius=args.min_radius,
@@ -244,6 +245,19 @@ def _pack(args) -> int:
               file=sys.stderr)
         return 130
     return 0 if report.ok else 1
+
+
+def _pack_keeping_invalid(pack, output: str | None, shape, **options):
+    """``pack(shape, **options)``; a packing that fails the final check is kept as made beside
+    ``output`` (``.invalid.npz``), and the error says where, so that a long run is not lost."""
+    try:
+        return pack(shape, **options)
+    except InvalidPackingError as error:
+        if error.packing is None or not output:
+            raise
+        reason = _one_line(error).replace(f" {KEPT_IN_ERROR}", "")
+        kept = _save_or_keep(error.packing, f"{output}.invalid.npz", None, {})
+        raise InvalidPackingError(f"{reason} The packing as made was kept in {kept}") from error
 
 
 def _check_output(path: str, format: str | None, dim: int, options: dict) -> None:
@@ -323,6 +337,7 @@ def _recorded_shape(packing, override: str | None, required: bool, trust: bool =
 
 
 def _verify(args) -> int:
+    from .consistency import volume_problem
     from .verify import verify
 
     packing = _load(args.packing)
@@ -330,7 +345,10 @@ def _verify(args) -> int:
     report = verify(packing, shape, args.tol, independent=args.independent)
     print(f"{args.packing}: {len(packing)} spheres in {packing.dim}-D against {shape!r}")
     print(f"verified: {report.summary()}")
-    return 0 if report.ok else 1
+    problem = volume_problem(packing)
+    if problem:
+        print(f"IMPOSSIBLE: {problem}")
+    return 0 if report.ok and not problem else 1
 
 
 def _render(args) -> int:
@@ -373,6 +391,7 @@ def _refuse(options: dict, picture: str) -> None:
 def _info(args) -> int:
     import numpy as np
 
+    from .consistency import volume_problem
     from .packing import repair_summary
 
     packing = _load(args.packing)
@@ -383,6 +402,9 @@ def _info(args) -> int:
     if np.isfinite(packing.volume):
         error = f" +- {packing.fill_error:.4f}" if packing.volume_error else ""
         print(f"fill:       {packing.fill:.6f}{error} of volume {packing.volume:.6g}")
+    problem = volume_problem(packing)
+    if problem:
+        print(f"IMPOSSIBLE: {problem}")
     if len(radii):
         quartiles = np.percentile(radii, [0, 25, 50, 75, 100])
         print("radii:      min {:.4g}  q1 {:.4g}  median {:.4g}  q3 {:.4g}  max {:.4g}".format(*quartiles))

@@ -48,8 +48,23 @@ class GridWarning(UserWarning):
     by a search, and spheres may come out well below the largest that fit (pass a finer ``grid=``)."""
 
 
+#: How an :class:`InvalidPackingError`'s message ends when it keeps the packing.
+KEPT_IN_ERROR = "The packing as made is in error.packing."
+
+
 class InvalidPackingError(NdpackError, RuntimeError):
-    """A packing failed the final float64 check and ``on_invalid="raise"`` asked not to repair it."""
+    """A packing failed the driver's final check: ``on_invalid="raise"`` asked not to repair it,
+    or nothing could (a volume the spheres exceed).
+
+    Attributes
+    ----------
+    packing : Packing or None
+        The packing as made, so that a long run is not lost with the error.
+    """
+
+    def __init__(self, message: str, packing=None):
+        super().__init__(message)
+        self.packing = packing
 
 
 class RepairWarning(RuntimeWarning):

@@ -30,6 +30,8 @@ import base64
 import io
 import json
 import math
+import re
+import warnings
 import xml.etree.ElementTree as ET
 import zipfile
 from dataclasses import dataclass
@@ -272,9 +274,18 @@ def _reading(fmt: Format, path: Path, read: Callable):
     except (KeyError, IndexError, TypeError, ValueError, OSError, EOFError, SyntaxError, zipfile.BadZipFile) as error:
         # SyntaxError covers xml.etree's ParseError; ValueError covers JSON and base64 errors.
         reason = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
-        if isinstance(error, KeyError):
-            reason = f"it has no {reason}"
-        elif "pickled" in reason:  # numpy's advice to unpickle it: ndpack never does
+        if path.is_file() and path.stat().st_size == 0:
+            reason = "it is empty (0 bytes)"
+        elif isinstance(error, json.JSONDecodeError):
+            reason = f"its JSON is not valid ({error.msg}, at character {error.pos})"
+        elif isinstance(error, UnicodeDecodeError):
+            reason = "it is binary, not text"
+        elif isinstance(error, KeyError):
+            key = str(error.args[0]) if error.args else reason
+            reason = f"it has no {key.removesuffix(' is not a file in the archive')!r}"
+        elif "Object arrays" in reason:  # numpy's advice to allow pickles: ndpack never loads them
+            reason = "it holds arrays of Python objects (pickled), which ndpack never loads"
+        elif "pickle" in reason:
             reason = "it is not an archive of arrays (NumPy would read it as pickled objects, which ndpack never loads)"
         raise NdpackError(f"{path} is not a readable ndpack packing ({fmt.name} format): {reason}") from error
 
@@ -354,11 +365,22 @@ def _packing(metadata: dict | None, centers, radii, rounds=None, **extra) -> Pac
     metadata = metadata or {}
     radii = np.asarray(radii, dtype=np.float64).reshape(-1)
     dim = metadata.get("dim", 3)
+    if isinstance(dim, bool) or not isinstance(dim, int) or dim < 1:
+        raise ValueError(f"its dimension {dim!r} is not a positive integer")
     centers = np.asarray(centers, dtype=np.float64).reshape(-1, dim)
     rounds = np.zeros(len(radii), dtype=np.int64) if rounds is None else np.asarray(rounds, dtype=np.int64)
     if not len(centers) == len(radii) == len(rounds):
         raise ValueError(f"it has {len(centers)} centres, {len(radii)} radii and {len(rounds)} rounds")
+    # A corrupted or hand-edited file must not load as spheres that verify() or a picture would trip over.
+    for what, bad in (("radii", ~(np.isfinite(radii) & (radii > 0))), ("centres", ~np.isfinite(centers).all(axis=1))):
+        if bad.any():
+            first = int(np.flatnonzero(bad)[0])
+            raise ValueError(f"{int(bad.sum())} of its {what} are not {'positive ' if what == 'radii' else ''}finite "
+                             f"numbers, first of sphere {first}")
     volume, volume_error = metadata.get("volume"), metadata.get("volume_error")
+    for name, value in (("volume", volume), ("volume_error", volume_error)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float)) or value < 0):
+            raise ValueError(f"its {name} {value!r} is not a non-negative number")
     return Packing(
         centers=centers,
         radii=radii,
@@ -393,7 +415,10 @@ def _write_npz(packing: Packing, path: Path) -> None:
 
 
 def _read_npz(path: Path) -> Packing:
-    with np.load(path, allow_pickle=False) as data:
+    data = np.load(path, allow_pickle=False)
+    if not isinstance(data, np.lib.npyio.NpzFile):
+        raise ValueError("it is a single NumPy array (.npy), not an archive of arrays")
+    with data:
         meta = _check_metadata(json.loads(str(data["metadata"])), path)
         return _packing(
             meta,
@@ -421,9 +446,18 @@ def _read_csv(path: Path) -> Packing:
         raise ValueError("the first line is not ndpack's metadata comment")
     meta = _check_metadata(json.loads(first[2:]), path)
     dim = meta["dim"]
-    table = np.loadtxt(path, delimiter=",", skiprows=2, ndmin=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # "input contained no data": a packing of no spheres
+        try:
+            table = np.loadtxt(path, delimiter=",", skiprows=2, ndmin=2)
+        except ValueError as error:
+            changed = re.search(r"number of columns changed from \d+ to \d+ at row \d+", str(error))
+            raise ValueError(f"its rows differ in length (the {changed.group()})" if changed else str(error)) from None
     if table.size == 0:
         table = np.zeros((0, dim + 2))
+    if table.shape[1] != dim + 2:
+        raise ValueError(f"its rows have {table.shape[1]} columns, but a {dim}-D packing has {dim + 2} "
+                         f"(x0 to x{dim - 1}, radius, round)")
     return _packing(meta, table[:, :dim], table[:, dim], table[:, dim + 1].astype(np.int64))
 
 

@@ -69,7 +69,8 @@ class Packing:
         what that check repaired (``pack(..., on_invalid="repair")``): the counts of spheres
         ``outside`` and ``overlapping_pairs`` it found, how many were ``shrunk`` and
         ``dropped``, the ``worst_poke_out`` and ``worst_overlap`` before the repair, and the
-        likely ``cause``.
+        likely ``cause``; where a plug-in's distance was steeper than a distance across some
+        spheres (dropped), also their count ``steep`` and the ``worst_slope`` found.
     shape : Oracle or None
         The packed shape (not saved to files).
     """
@@ -166,7 +167,9 @@ def repair_summary(repair: dict) -> str:
         value = repair.get(key)
         return "-" if value is None else f"{value:.3g}"
 
+    steep = (f", {repair['steep']} where the distance rose faster than a distance (slope at least "
+             f"{worst('worst_slope')})" if repair.get("steep") else "")
     return (f"{repair['shrunk']} sphere(s) shrunk and {repair['dropped']} dropped after "
-            f"{repair['outside']} poked out (worst {worst('worst_poke_out')}) and "
-            f"{repair['overlapping_pairs']} pair(s) overlapped (worst {worst('worst_overlap')}): "
+            f"{repair['outside']} poked out (worst {worst('worst_poke_out')}), "
+            f"{repair['overlapping_pairs']} pair(s) overlapped (worst {worst('worst_overlap')}){steep}: "
             f"{repair['cause']}")

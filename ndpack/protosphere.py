@@ -30,7 +30,8 @@ from tqdm.auto import tqdm
 
 from .backends import get_backend
 from .backends.prototypes import best_starts
-from .errors import GridWarning, InvalidPackingError, ParameterError, RepairWarning, ShapeError
+from .consistency import ensure_possible
+from .errors import KEPT_IN_ERROR, GridWarning, InvalidPackingError, ParameterError, RepairWarning, ShapeError
 from .oracle import Oracle, ball_volume, check_compatible, check_packable
 from .packing import Packing, RoundStats
 from .rounds import FAST_WINDOW, POLISH_AHEAD, POLISH_WINDOW, SPLIT_RATIO, Fast, Faithful
@@ -659,10 +660,12 @@ def _ensure_valid(packing: Packing, shape: Oracle, margin: float, precision: str
     plug-ins that are not conservative, against float32 rounding on the GPU, and against a
     faulty backend. A repaired packing is no longer the greedy packing the driver made, so the
     repair is recorded in ``packing.repair`` and announced with a :class:`RepairWarning`.
+    Then :func:`~ndpack.consistency.ensure_possible` checks what verification cannot see: a
+    plug-in's slope across each sphere, and the spheres' volume against the shape's.
     """
     report = verify(packing, shape)
     if report.ok:
-        return packing
+        return ensure_possible(packing, shape, on_invalid, margin)
     if precision != "float64":
         cause = f"the {precision} backend's rounding exceeded its safety margin"
     else:
@@ -672,7 +675,8 @@ def _ensure_valid(packing: Packing, shape: Oracle, margin: float, precision: str
              f"({report.summary()})")
     if on_invalid == "raise":
         raise InvalidPackingError(f"the packing failed its final check: {found}; {cause}. "
-                                  "Pass on_invalid='repair' to shrink or drop those spheres instead")
+                                  f"Pass on_invalid='repair' to shrink or drop those spheres instead. {KEPT_IN_ERROR}",
+                                  packing=packing)
     radii = packing.radii.copy()
     for index in report.outside:
         radii[index] = -shape._distance(packing.centers[index : index + 1])[0] - margin
@@ -703,4 +707,4 @@ def _ensure_valid(packing: Packing, shape: Oracle, margin: float, precision: str
     report = verify(packing, shape)
     if not report.ok:  # shrinking can only help; this is a last line of defence
         raise ShapeError(f"could not repair the packing: {report.summary()}")
-    return packing
+    return ensure_possible(packing, shape, on_invalid, margin)

@@ -18,6 +18,19 @@ import numpy as np
 from ..errors import BoundsError, DimensionError, OracleError, ParameterError
 from ..oracle import Oracle, check_finite, unit_rows
 
+#: Where the points of each ray of :func:`steepest_on_rays` lie, as fractions of its length
+#: after its start: evenly (a steep region covering about 1/16 of the ray is met), and closer and
+#: closer to its end, at 1 - 2^-k down to 1e-7 (an overstated hole sits just inside the end of
+#: the ray that the value sized, where a point meets it once it spans a factor of 2 in 1 - t).
+RAY_FRACTIONS = np.union1d(np.arange(1, 17) / 16, 1.0 - 0.5 ** np.arange(5, 24))
+#: A slope above ``1 + SLOPE_TOLERANCE`` is not rounding: the function is steeper than a distance.
+SLOPE_TOLERANCE = 1e-6
+#: Pairs of a ray closer than this fraction of the shape's scale are left out: the rounding of
+#: two values (about 1e-16 of the scale) would make up a slope of up to 1e-10 over them.
+SHORTEST_PAIR = 1e-6
+#: Rays per call of the distance in :func:`steepest_on_rays` (bounds its memory).
+RAY_CHUNK = 1 << 14
+
 
 def _check_values(values, expected: tuple, points: np.ndarray, what: str, hint: str) -> np.ndarray:
     """Turn a user function's result into float64 of the ``expected`` shape, finite, or raise.
@@ -149,7 +162,12 @@ class Function(Oracle):
         """Check on random pairs of points that the function is 1-Lipschitz.
 
         Half the pairs are independent uniform points of the bounds, half are close pairs
-        (a step of 1e-3 of the box diagonal), which measure the local slope.
+        (a step of 1e-3 of the box diagonal), which measure the local slope. Then, from
+        ``samples // 2`` more random points ``x``, rays run to where the value says the boundary
+        is (``|f(x)|`` along the gradient, towards the boundary), with ``RAY_FRACTIONS`` points on
+        each (:func:`steepest_on_rays`): a small region where the function is steep (a small
+        hole whose distance is overstated) is rarely hit by random pairs, but the rays of every
+        point whose value is set by it run into it.
 
         Parameters
         ----------
@@ -185,19 +203,31 @@ class Function(Oracle):
         length = np.linalg.norm(first - second, axis=1)
         moved = length > 0  # clipping can, rarely, bring a point back onto its partner
         ratios = change[moved] / length[moved]
-        if ratios.size == 0:
-            return 0.0
-        worst = int(np.argmax(ratios))
-        largest = float(ratios[worst])
-        if largest > 1 + 1e-6:
-            x, y = first[moved][worst], second[moved][worst]
+        largest = 0.0
+        if ratios.size:
+            worst = int(np.argmax(ratios))
+            largest = float(ratios[worst])
+            self._refuse_steep(largest, first[moved][worst], second[moved][worst])
+
+        starts = lower + (upper - lower) * rng.random((max(samples // 2, 1), self.dim))
+        values = self._distance(starts)
+        # Towards the boundary: up the gradient from inside, down it from outside.
+        towards = -np.sign(values)[:, None] * self._gradient(starts)
+        slopes, x, y = steepest_on_rays(self._distance, starts, towards, np.abs(values), self._bounds,
+                                        SHORTEST_PAIR * self.scale)
+        worst = int(np.argmax(slopes))
+        self._refuse_steep(float(slopes[worst]), x[worst], y[worst])
+        return max(largest, float(slopes[worst]))
+
+    def _refuse_steep(self, slope: float, x: np.ndarray, y: np.ndarray) -> None:
+        """Raise :class:`OracleError` if ``slope``, found between points ``x`` and ``y`` (d,), is above 1."""
+        if slope > 1 + SLOPE_TOLERANCE:
             raise OracleError(
                 f"the distance function {self.name!r} is not a conservative distance (Lipschitz "
-                f"constant at least {largest:.6g}, between {np.round(x, 6).tolist()} and "
-                f"{np.round(y, 6).tolist()}); divide it by a bound on its slope (at least {largest:.6g}) "
+                f"constant at least {slope:.6g}, between {np.round(x, 6).tolist()} and "
+                f"{np.round(y, 6).tolist()}); divide it by a bound on its slope (at least {slope:.6g}) "
                 "to make it one"
             )
-        return largest
 
     def __repr__(self) -> str:
         return f"Function({self.name!r}, dim={self.dim})"
@@ -257,3 +287,60 @@ def tree(shape):
     for part in below:
         if isinstance(part, Oracle):  # Capsule's a and b are points, not shapes
             yield from tree(part)
+
+
+def steepest_on_rays(distance, starts, directions, lengths, bounds=None, shortest=0.0):
+    """The steepest slope of ``distance`` along each ray, and the pair of points where it is.
+
+    Each ray holds its start and the points ``x_j = start + t_j * length * direction``, ``t_j``
+    in ``RAY_FRACTIONS`` (clipped to ``bounds``); its slope is the largest ``|f(x) - f(y)| /
+    |x - y|`` over the pairs (start, ``x_j``) and (``x_{j-1}``, ``x_j``). A 1-Lipschitz function has
+    slopes of at most 1; from a sphere's centre to its surface, a larger one means the sphere
+    the function sized may reach outside the shape.
+
+    Parameters
+    ----------
+    distance : callable
+        ``(m, d)`` float64 points to ``(m,)`` float64 values.
+    starts : (k, d) float64
+    directions : (k, d) float64
+        Unit rows (a zero row gives a ray of one point, slope 0).
+    lengths : (k,) float64
+        Non-negative.
+    bounds : (2, d) float64, optional
+        Points are clipped to this box, where the function is defined.
+    shortest : float
+        Pairs closer than this are left out (see ``SHORTEST_PAIR``).
+
+    Returns
+    -------
+    slopes : (k,) float64
+    first, second : (k, d) float64
+        The pair of each ray where its slope was found.
+    """
+    starts = np.asarray(starts, dtype=np.float64)
+    count, dim = starts.shape
+    slopes = np.zeros(count)
+    first, second = starts.copy(), starts.copy()
+    fractions = np.concatenate([[0.0], RAY_FRACTIONS])
+    last = len(RAY_FRACTIONS)
+    # Pairs (start, x_j) and (x_{j-1}, x_j): two a point.
+    before = np.concatenate([np.zeros(last, int), np.arange(last)])
+    after = np.concatenate([np.arange(1, last + 1)] * 2)
+    for begin in range(0, count, RAY_CHUNK):
+        rows = slice(begin, min(begin + RAY_CHUNK, count))
+        steps = (lengths[rows, None] * directions[rows])[:, None, :] * fractions[None, :, None]
+        points = starts[rows, None, :] + steps
+        if bounds is not None:
+            points = np.clip(points, bounds[0], bounds[1])
+        values = distance(points.reshape(-1, dim)).reshape(len(steps), last + 1)
+        rise = np.abs(values[:, after] - values[:, before])
+        length = np.linalg.norm(points[:, after] - points[:, before], axis=2)
+        apart = length > max(shortest, 0.0)
+        ratio = np.where(apart, rise / np.where(apart, length, 1.0), 0.0)
+        worst = np.argmax(ratio, axis=1)
+        ray = np.arange(len(steps))
+        slopes[rows] = ratio[ray, worst]
+        first[rows] = points[ray, before[worst]]
+        second[rows] = points[ray, after[worst]]
+    return slopes, first, second
