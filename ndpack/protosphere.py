@@ -122,13 +122,16 @@ def grid_counts(bounds: np.ndarray, grid=None) -> np.ndarray:
         side = (np.prod(extent) / DEFAULT_CELLS) ** (1.0 / dim)
         return np.maximum(1, np.round(extent / side)).astype(np.int64)
     counts = np.asarray(grid)
+    # Whole, finite, at least 1, and numbers (a bool is not a cell count).
+    whole = (counts.dtype.kind in "iuf" and counts.ndim <= 1 and np.all(np.isfinite(counts))
+             and np.all(counts >= 1) and np.all(counts == np.round(counts)))
     if counts.ndim == 0:
-        if not (float(counts) == int(counts) and int(counts) >= 1):
-            raise ParameterError(f"grid must be a positive integer, got {grid!r}")
+        if not whole:
+            raise ParameterError(f"grid must be a positive integer (cells along the longest side), got {grid!r}")
         side = extent.max() / int(counts)
         return np.maximum(1, np.round(extent / side)).astype(np.int64)
-    if counts.shape != (dim,) or np.any(counts < 1) or np.any(counts != np.round(counts)):
-        raise ParameterError(f"grid must be a positive integer or {dim} of them, got {grid!r}")
+    if counts.shape != (dim,) or not whole:
+        raise ParameterError(f"grid must be a positive integer or {dim} of them (cells per axis), got {grid!r}")
     return counts.astype(np.int64)
 
 
@@ -148,11 +151,18 @@ def _check_parameters(n, min_radius, fill, time_budget, iterations, batch, resta
         raise ParameterError(f"restarts must be a non-negative integer, got {restarts!r}")
     if not (isinstance(min_radius, (int, float, np.number)) and np.isfinite(min_radius) and min_radius >= 0):
         raise ParameterError(f"min_radius must be a non-negative number, got {min_radius!r}")
-    if fill is not None and not (0 < fill < 1):
+    def number(value):
+        return isinstance(value, (int, float, np.number)) and not isinstance(value, bool)
+
+    if fill is not None and not (number(fill) and 0 < fill < 1):
         raise ParameterError(f"fill (the target fill fraction) must lie in (0, 1), got {fill!r}")
-    if time_budget is not None and not (time_budget > 0):
-        raise ParameterError(f"time_budget must be a positive number of seconds, got {time_budget!r}")
-    if isinstance(seed, (bool, float)) or (isinstance(seed, (int, np.integer)) and seed < 0):
+    if time_budget is not None and not (number(time_budget) and 0 < time_budget < np.inf):
+        raise ParameterError(f"time_budget must be a positive number of seconds (finite), got {time_budget!r}")
+    try:  # what numpy takes as a seed, less a bool or a float (which it would take or misread)
+        usable = not isinstance(seed, (bool, float, str)) and (np.random.default_rng(seed) is not None)
+    except (TypeError, ValueError):
+        usable = False
+    if not usable:
         raise ParameterError(f"seed must be None, an integer >= 0 or a numpy Generator, got {seed!r}")
 
 
