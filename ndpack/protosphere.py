@@ -502,9 +502,11 @@ def pack(
     on_invalid : {"repair", "raise"}, optional
         What to do should the final float64 check find a sphere outside or two overlapping
         (a plug-in that is not 1-Lipschitz, float32 rounding beyond its margin, a faulty
-        backend): ``"repair"`` shrinks or drops those spheres, warns (:class:`RepairWarning`)
-        and records it in :attr:`Packing.repair`; ``"raise"`` raises
-        :class:`InvalidPackingError`. Default: ``$NDPACK_ON_INVALID``, else ``"repair"``.
+        backend), or a plug-in's distance rise faster than a distance across a sphere
+        (:mod:`ndpack.consistency`): ``"repair"`` shrinks or drops those spheres, warns
+        (:class:`RepairWarning`) and records it in :attr:`Packing.repair`; ``"raise"`` raises
+        :class:`InvalidPackingError` (the packing as made in its ``packing``). Default:
+        ``$NDPACK_ON_INVALID``, else ``"repair"``.
     on_round : callable, optional
         Called after each round with a :class:`Round` (the new spheres, count, fill, time): to
         watch a run, plot it as it goes, or stop it (return True: ``stop_reason == "callback"``).
@@ -521,7 +523,9 @@ def pack(
     NdpackError
         Before packing, with a one-line reason: a bad parameter (``ParameterError``), bounds
         that cut the shape (``BoundsError``), or a plug-in found steeper than a distance on
-        random pairs of points (``OracleError``, see ``Function.check_lipschitz``).
+        random pairs of points (``OracleError``, see ``Function.check_lipschitz``). After
+        packing, ``InvalidPackingError`` when the spheres' volume exceeds the shape's (a
+        distance steeper than it says, or a wrong volume), whatever ``on_invalid`` says.
     """
     shape = as_oracle(shape)
     check_compatible(shape)
