@@ -33,6 +33,8 @@ from fuzz_check import OUTCOMES  # noqa: E402
 
 DEFAULT_RUNS = ["numpy:fast:1", "numpy:faithful:1", "numba:fast:0.35", "numba:faithful:0.35", "warp:fast:0.35",
                 "warp:faithful:0.35", "numba-cuda:fast:0.008"]
+#: Each backend's place in the seed of the draw that picks its trees.
+BACKENDS = ("numba", "numba-cuda", "numpy", "warp")
 #: The simulator's cases: spheres, cells along the longest side, time budget (seconds).
 SIMULATOR_N, SIMULATOR_GRID, SIMULATOR_BUDGET = 4, 4, 120.0
 
@@ -81,17 +83,16 @@ class Worker:
             self.process = None
 
 
-def jobs(trees: int, seed: int, runs: list[str], budget: float):
-    """(seed, index, backend, mode, budget) for each case, tree by tree."""
+def jobs(trees, seed: int, runs: list[str], budget: float):
+    """(seed, index, backend, mode, budget) for each case, tree by tree (``trees``: the indices)."""
     plans = []
     for run in runs:
         backend, mode, share = run.split(":")
         plans.append((backend, mode, float(share)))
-    for index in range(trees):
+    for index in trees:
         for number, (backend, mode, share) in enumerate(plans):
             # One draw per tree and backend, so that a backend's modes pack the same trees.
-            backends = sorted({b for b, _, _ in plans})
-            draw = np.random.default_rng([seed, index, 1 + backends.index(backend)]).random()
+            draw = np.random.default_rng([seed, index, 1 + BACKENDS.index(backend)]).random()
             if draw < share:
                 yield seed, index, backend, mode, budget
 
@@ -114,6 +115,7 @@ def table(records: list[dict]) -> str:
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--trees", type=int, default=1000)
+    parser.add_argument("--only", type=int, nargs="+", help="run only these trees (to re-run failures)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--runs", nargs="+", default=DEFAULT_RUNS, help="backend:mode:share of the trees")
     parser.add_argument("--budget", type=float, default=20.0, help="nd.pack's time_budget per case (seconds)")
@@ -123,7 +125,7 @@ def main(argv=None):
 
     import ndpack
 
-    todo = list(jobs(args.trees, args.seed, args.runs, args.budget))
+    todo = list(jobs(args.only or range(args.trees), args.seed, args.runs, args.budget))
     workers = {False: Worker(False), True: Worker(True)}
     records, started = [], time.perf_counter()
     try:
@@ -145,7 +147,7 @@ def main(argv=None):
         write_json(args.out, {
             "command": "python bench/fuzz.py " + " ".join(argv if argv is not None else sys.argv[1:]),
             "machine": machine_info(), "ndpack_path": ndpack.__file__, "versions": versions(),
-            "trees": args.trees, "seed": args.seed, "runs": args.runs, "budget": args.budget, "timeout": args.timeout,
+            "trees": args.trees, "only": args.only, "seed": args.seed, "runs": args.runs, "budget": args.budget, "timeout": args.timeout,
             "wall_seconds": round(time.perf_counter() - started, 1), "summary": summary, "records": records,
         })
     print(summary)

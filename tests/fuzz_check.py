@@ -153,7 +153,10 @@ def run_case(case, backend: str, mode: str, time_budget: float | None = None) ->
     try:
         shape = case.build()
     except nd.NdpackError as error:
-        record.update(outcome="clear error", where="build", **_error(error))
+        # A class given an empty part (nd.Union(a, empty)) refuses it by design, even where the
+        # whole is not empty: a clear error, with the reference's count kept to tell.
+        found = inside_points(case.reference) if isinstance(error, nd.ShapeError) else None
+        record.update(outcome="clear error", where="build", inside_samples=found, **_error(error))
     except Exception as error:  # noqa: BLE001 - every other exception is what fuzzing looks for
         record.update(outcome="crash", where="build", traceback=traceback.format_exc(limit=-4), **_error(error))
     else:

@@ -413,10 +413,15 @@ class Drawer:
     def node_cut(self, depth):
         a = self.tree(depth)
         cut = self.cutter(a.reference)
-        if self.rng.random() < 0.6:
-            code, reference = f"({a.code} & {cut.code})", ref.intersection(a.reference, cut.reference)
+        keep = self.rng.random() < 0.6
+        if a.foreign == "shapely":  # the ndpack shape on the left: a - cut is ~cut & a
+            code = f"({cut.code} & {a.code})" if keep else f"(~{cut.code} & {a.code})"
         else:
-            code, reference = f"({a.code} - {cut.code})", ref.difference(a.reference, cut.reference)
+            code = f"({a.code} & {cut.code})" if keep else f"({a.code} - {cut.code})"
+        if keep:
+            reference = ref.intersection(a.reference, cut.reference)
+        else:
+            reference = ref.difference(a.reference, cut.reference)
         return Part(code, reference, a.kinds | cut.kinds | {"cut"})
 
     def node_complement(self, depth):
