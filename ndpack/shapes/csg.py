@@ -251,18 +251,19 @@ class _Transformed(Oracle):
 
 
 class Translate(_Transformed):
-    """The child moved by ``offset`` (dim,)."""
+    """The child moved by ``offset`` (dim,), kept as ``shift`` (an attribute named ``offset``
+    would hide the :meth:`offset` method of every shape)."""
 
     def __init__(self, child: Oracle, offset):
         super().__init__(child)
-        self.offset = as_vector(offset, self.dim, "translation offset")
-        self._bounds = child.bounds + self.offset
+        self.shift = as_vector(offset, self.dim, "translation offset")
+        self._bounds = child.bounds + self.shift
 
     def _to_child(self, points):
-        return points - self.offset
+        return points - self.shift
 
     def _kernel(self, program):
-        o = program.add_params(self.offset)
+        o = program.add_params(self.shift)
         child = program.shape(self.child)
         return program.define(
             "def _(p, prm):\n"
@@ -273,11 +274,11 @@ class Translate(_Transformed):
         )
 
     def _tape(self, tape):
-        with tape.transformed(np.eye(self.dim), -self.offset):
+        with tape.transformed(np.eye(self.dim), -self.shift):
             tape.add(self.child)
 
     def __repr__(self):
-        return f"{self.child!r}.translate({self.offset.tolist()})"
+        return f"{self.child!r}.translate({self.shift.tolist()})"
 
 
 class Rotate(_Transformed):

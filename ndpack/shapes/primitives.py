@@ -340,8 +340,9 @@ class RoundedBox(_Analytic):
 class HalfSpace(_Analytic):
     """The half-space ``{x : normal . x <= offset}``.
 
-    The normal is normalised and the offset divided by its length, so ``offset`` becomes the
-    signed distance of the boundary plane from the origin.
+    The normal is normalised and the offset divided by its length, kept as ``plane_offset``:
+    the signed distance of the boundary plane from the origin (an attribute named ``offset``
+    would hide the :meth:`offset` method of every shape).
 
     Parameters
     ----------
@@ -357,12 +358,12 @@ class HalfSpace(_Analytic):
 
     def __init__(self, normal, offset=0.0):
         self.normal, length = _unit_normal(normal)
-        self.offset = _finite(offset, "offset") / length
+        self.plane_offset = _finite(offset, "offset") / length
         self.dim = self.normal.shape[0]
-        self._bounds = _plane_bounds(self.normal, -np.inf, self.offset)
+        self._bounds = _plane_bounds(self.normal, -np.inf, self.plane_offset)
 
     def _distance(self, points):
-        return points @ self.normal - self.offset
+        return points @ self.normal - self.plane_offset
 
     def _distance_and_gradient(self, points):
         gradient = np.broadcast_to(self.normal, points.shape).copy()
@@ -372,10 +373,10 @@ class HalfSpace(_Analytic):
         return math.inf
 
     def _leaf(self):
-        return library.half_space, [*self.normal, self.offset]
+        return library.half_space, [*self.normal, self.plane_offset]
 
     def __repr__(self):
-        return f"HalfSpace(normal={_floats(self.normal)}, offset={self.offset!r})"
+        return f"HalfSpace(normal={_floats(self.normal)}, offset={self.plane_offset!r})"
 
 
 class Slab(_Analytic):
