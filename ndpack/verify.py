@@ -207,8 +207,6 @@ def _independent_check(shape, centers: np.ndarray, radii: np.ndarray, tol: float
     if winding is None:
         raise ParameterError(f"independent=True checks triangle meshes (ndpack.TriangleMesh) only, not {shape!r}; "
                              "leave it out for other shapes")
-    if len(radii) == 0:
-        return np.zeros(0, dtype=np.int64)
     directions = sphere_directions(SAMPLES_PER_SPHERE)
     points = centers[:, None, :] + np.maximum(radii - tol, 0.0)[:, None, None] * directions  # (n, k, 3)
     inside = winding(points.reshape(-1, 3)).reshape(len(radii), -1) > 0.5

@@ -489,26 +489,27 @@ class Drawer:
         part = self.tree(depth) if part is None else part
         matrix = orthogonal(self.rng, self.dim, reflect=self.rng.random() < 0.2)
         center = self.point(0.5)
-        if part.foreign and part.foreign != "trimesh":
-            return self._affine(part, matrix, center, "rotate")
-        part = self._ndpack(part)
-        if self.rng.random() < 0.5:
-            code = f"{part.code}.rotate({text(matrix)}, center={text(center)})"
-        else:
-            code = f"nd.Rotate({part.code}, {text(matrix)}, {text(center)})"
-        return Part(code, ref.rotated(part.reference, matrix, center), part.kinds | {"rotate"})
+        return self._linear(part, matrix, center, "rotate", "rotate", "Rotate", text(matrix),
+                            lambda reference: ref.rotated(reference, matrix, center))
 
     def node_scale(self, depth, part=None):
         part = self.tree(depth) if part is None else part
         factor, center = float(np.exp(self.rng.uniform(-0.7, 0.7))), self.point(0.5)
+        return self._linear(part, factor * np.eye(self.dim), center, "scale", "scale_by", "Scale", num(factor),
+                            lambda reference: ref.scaled(reference, factor, center))
+
+    def _linear(self, part, matrix, center, kind, method, node, argument, mapped):
+        """``part`` mapped by ``matrix`` about ``center``: another library's object through
+        :meth:`_affine`, else as ndpack's ``method`` or ``node`` class (half each) with ``argument``
+        (code), its reference mapped by ``mapped``."""
         if part.foreign and part.foreign != "trimesh":
-            return self._affine(part, factor * np.eye(self.dim), center, "scale")
+            return self._affine(part, matrix, center, kind)
         part = self._ndpack(part)
         if self.rng.random() < 0.5:
-            code = f"{part.code}.scale_by({num(factor)}, center={text(center)})"
+            code = f"{part.code}.{method}({argument}, center={text(center)})"
         else:
-            code = f"nd.Scale({part.code}, {num(factor)}, {text(center)})"
-        return Part(code, ref.scaled(part.reference, factor, center), part.kinds | {"scale"})
+            code = f"nd.{node}({part.code}, {argument}, {text(center)})"
+        return Part(code, mapped(part.reference), part.kinds | {kind})
 
     def far_away(self, part: Part) -> Part:
         """The whole tree scaled by up to 100 either way and moved up to 1,000 away: float64 at
