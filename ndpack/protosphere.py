@@ -30,6 +30,7 @@ from tqdm.auto import tqdm
 
 from .backends import get_backend
 from .backends.prototypes import best_starts
+from .backends.restarts import Restarts, run_key, stream
 from .consistency import ensure_possible
 from .errors import KEPT_IN_ERROR, GridWarning, InvalidPackingError, ParameterError, RepairWarning, ShapeError
 from .oracle import Oracle, ball_volume, check_compatible, check_packable
@@ -194,7 +195,7 @@ class RunState:
     :meth:`insert`).
     """
 
-    def __init__(self, shape, backend, counts, steps, polish_steps, restarts, rng, deadline=None, budget=None):
+    def __init__(self, shape, backend, counts, steps, polish_steps, restarts, key, deadline=None, budget=None):
         self.shape = shape
         # time.perf_counter() at which the run's time budget (seconds, for sizing pieces) runs out
         self.deadline, self.budget = deadline, budget
@@ -203,7 +204,9 @@ class RunState:
         self.dim = shape.dim
         self.steps, self.polish_steps = steps, polish_steps  # the cooling schedules (:func:`schedules`)
         self.restarts = restarts
-        self.rng = rng
+        # Random restarts come from a hash of (key, serial, prototype, try, axis): the same points on
+        # every backend, drawn on a GPU where its prototypes are (ndpack.backends.restarts).
+        self.key, self.serial = key, 0
         # A float32 backend's clearances are good to about 1e-7 of the scale: it asks for more.
         self.margin = max(SAFETY_MARGIN, getattr(backend, "margin", SAFETY_MARGIN)) * shape.scale
         self.count = 0
@@ -230,7 +233,7 @@ class RunState:
         keep = reach > 0
         cells = {"lower": cell_lower[keep], "upper": cell_lower[keep] + cell_size, "reach": reach[keep],
                  "wall": wall[keep]}
-        starts = self._candidate_starts(centres[keep][None], cells=cells)
+        starts = self._restarts(centres[keep]).points(np.arange(len(cells["lower"])), cells["lower"], cells["upper"])
         no_spheres = np.zeros((len(cells["lower"]), 0), dtype=np.int64)
         points, clearance = best_starts(self.backend, self.shape, starts, *self.spheres, no_spheres)
         alive = clearance > 0
@@ -340,14 +343,11 @@ class RunState:
     def cell_upper(self):
         return self.prototypes.cell_upper
 
-    def _candidate_starts(self, first, ids=None, tries=None, cells=None):
-        """(k + tries, n, d): the ``first`` (k, n, d) points and random points of each cell
-        (of the store, or of ``cells`` before there is one)."""
-        lower = cells["lower"] if cells else self.cell_lower if ids is None else self.cell_lower[ids]
-        upper = cells["upper"] if cells else self.cell_upper if ids is None else self.cell_upper[ids]
-        tries = self.restarts if tries is None else tries
-        random = lower + (upper - lower) * self.rng.random((tries, *lower.shape))
-        return np.concatenate([first, random])
+    def _restarts(self, first=None, tries=None) -> Restarts:
+        """The next restart of the run: ``first`` (k, d) (or None) and ``tries`` random points
+        per prototype (default ``restarts``), from a new stream."""
+        self.serial += 1
+        return Restarts(stream(self.key, self.serial), self.restarts if tries is None else tries, first)
 
     @property
     def spheres(self):
@@ -359,24 +359,21 @@ class RunState:
 
         The starts are the current point, ``first`` (k, d) if given (clipped to the cells), and
         ``tries`` random points of each cell (default ``restarts``). Long lists go in chunks
-        (of ``chunk``, by default as many as ``START_FLOATS`` allows), bounding their starts' memory.
+        (of ``chunk``, by default as many as ``START_FLOATS`` allows), bounding the memory of the
+        starts a host store makes; the chunks draw the same points as one piece would.
         """
-        tries = self.restarts if tries is None else tries
-        chunk = chunk or max(1024, START_FLOATS // ((tries + 2) * self.dim))
+        restarts = self._restarts(first, tries)
+        chunk = chunk or max(1024, START_FLOATS // ((restarts.tries + 2) * self.dim))
         for start in range(0, len(ids), chunk):
             part = slice(start, start + chunk)
-            lead = np.empty((0, len(ids[part]), self.dim))
-            if first is not None:
-                lead = np.clip(first[part], self.cell_lower[ids[part]], self.cell_upper[ids[part]])[None]
-            starts = self._candidate_starts(lead, ids[part], tries)
-            self._move_in_time(ids[part], starts if len(starts) else None)
+            self._move_in_time(ids[part], restarts.part(part))
 
     def out_of_time(self) -> bool:
         """Whether the time budget is spent; the driver stops after the round in progress."""
         return self.deadline is not None and time.perf_counter() >= self.deadline
 
-    def _move_in_time(self, ids, starts):
-        """Move prototypes ``ids`` (k,) from ``starts`` (t, k, d) or None. Under a deadline, in
+    def _move_in_time(self, ids, restarts):
+        """Move prototypes ``ids`` (k,) with ``restarts`` (a :class:`Restarts`). Under a deadline, in
         pieces sized to a small share of the budget, none begun once it has passed (the run ends
         after this round, so prototypes left unmoved are never chosen). Each prototype's move is
         independent of the others', so the pieces change no result, only when it stops."""
@@ -388,8 +385,7 @@ class RunState:
                 size = FIRST_PIECE if self._seconds_each is None else PIECE_SHARE * self.budget / self._seconds_each
             piece = slice(done, done + max(1, int(size)))
             started = time.perf_counter()
-            part = None if starts is None else starts[:, piece]
-            self.prototypes.move(ids[piece], *self.spheres, self.steps, starts=part)
+            self.prototypes.move(ids[piece], *self.spheres, self.steps, restarts=restarts.part(piece))
             self._seconds_each = (time.perf_counter() - started) / len(ids[piece])
             done = piece.stop
 
@@ -558,7 +554,7 @@ def pack(
     started = time.perf_counter()
     steps, polish_steps = schedules(mode, int(iterations))
     deadline = None if time_budget is None else started + time_budget
-    state = RunState(shape, backend, counts, steps, polish_steps, int(restarts), np.random.default_rng(seed),
+    state = RunState(shape, backend, counts, steps, polish_steps, int(restarts), run_key(np.random.default_rng(seed)),
                      deadline, time_budget)
     volume = shape.volume()
     if not volume.value > 0:

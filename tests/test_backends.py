@@ -17,6 +17,7 @@ import pytest
 
 import ndpack as nd
 from ndpack import backends
+from ndpack.backends.restarts import Restarts
 from ndpack.errors import BackendError
 from ndpack.protosphere import cooling_schedule
 
@@ -223,8 +224,9 @@ def _exercise(store, centers, radii, rng):
     touched, points, nearest = store.touched(centers[:2], radii[:2])
     answers["touched"] = touched, points, nearest
     answers["gather"] = store.gather(touched)
-    starts = rng.uniform(store.cell_lower[touched], store.cell_upper[touched], (3, len(touched), 2))
-    store.move(touched, centers[:2], radii[:2], cooling_schedule(30), starts=starts)
+    # A first point per prototype (some outside their cells: clipped) and 3 hashed random ones.
+    first = rng.uniform(store.cell_lower[touched] - 0.05, store.cell_upper[touched] + 0.05)
+    store.move(touched, centers[:2], radii[:2], cooling_schedule(30), restarts=Restarts(12345, 3, first))
     answers["after_move"] = store.all()
     leaders, best, _, unpolished = store.leaders(5, 0.1)
     answers["leaders5"] = leaders, best, unpolished

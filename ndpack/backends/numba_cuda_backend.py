@@ -151,13 +151,13 @@ def set_floats(ids, values, out):
         out[ids[b]] = values[b]
 
 
-def move_ids(ids, starts, tries, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
-             steps, h, polish, spread):
+def move_ids(ids, first, has_first, tries, stream, points, clearance, polished, lower, upper, wall, prm, centers,
+             radii, nbr, steps, h, polish, spread):
     t = cuda.grid(1)
     b = t // spread
     if t % spread == 0 and b < ids.shape[0]:
-        move_one(b, ids, starts, tries, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
-                 steps, h, polish)
+        move_one(b, ids, first, has_first, tries, stream, points, clearance, polished, lower, upper, wall, prm,
+                 centers, radii, nbr, steps, h, polish)
 '''
 ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
                "select_all", "max_all", "touched_index_select", "gather_ids", "index_bound_ids", "index_fill_ids",

@@ -189,17 +189,53 @@ def converge_from(x, g, best, cell, row, lower, upper, wall, prm, centers, radii
     return best_clearance
 
 
-def move_one(b, ids, starts, tries, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
-             steps, h, polish):
-    """Move prototype ``ids[b]`` in place: from the best of its point and ``starts[:tries, b]``,
-    converge; keep the result (``polish`` 0), or keep it only if better and mark it polished (1)."""
+def restart_mix(h):
+    """MurmurHash3's finaliser of a 32-bit word held in a uint64 (ndpack.backends.restarts)."""
+    h = h ^ (h >> np.uint64(16))
+    h = (h * np.uint64(0x85EBCA6B)) & np.uint64(0xFFFFFFFF)
+    h = h ^ (h >> np.uint64(13))
+    h = (h * np.uint64(0xC2B2AE35)) & np.uint64(0xFFFFFFFF)
+    return h ^ (h >> np.uint64(16))
+
+
+def restart_key(stream, i):
+    """Prototype ``i``'s hash in a restart's ``stream`` (a uint64)."""
+    word = np.uint64(i) & np.uint64(0xFFFFFFFF)
+    return restart_mix((stream + word * np.uint64(0x9E3779B9)) & np.uint64(0xFFFFFFFF))
+
+
+def restart_unit(key, counter):
+    """Number ``counter`` (from 0) in [0, 1) of a prototype with hash ``key``."""
+    word = restart_mix((key + np.uint64(counter + 1) * np.uint64(0x9E3779B9)) & np.uint64(0xFFFFFFFF))
+    return float(word) * 2.3283064365386963e-10  # 2**-32: exact in float64
+
+
+def move_one(b, ids, first, has_first, tries, stream, points, clearance, polished, lower, upper, wall, prm, centers,
+             radii, nbr, steps, h, polish):
+    """Move prototype ``ids[b]`` in place: from the best of its point, ``first[b]`` (clipped to
+    its cell, where ``has_first``) and ``tries`` random points of its cell drawn from
+    ``stream``, converge; keep the result (``polish`` 0), or keep it only if better and mark it
+    polished (1)."""
     i = ids[b]
     x = point()
     g = point()
     best = point()
     for k in range(D):
         x[k] = points[i, k]
-    best_start(x, g, starts, tries, i, b, lower, upper, wall, prm, centers, radii, nbr)
+    if has_first + tries > 0:
+        top = nearest_obstacle(x, prm, centers, radii, nbr, b, wall_floor(x, lower, upper, wall, i), -1.0)[0]
+        key = restart_key(stream, i)
+        for r in range(has_first + tries):
+            for k in range(D):
+                if r < has_first:
+                    g[k] = min(max(first[b, k], lower[i, k]), upper[i, k])
+                else:
+                    g[k] = lower[i, k] + (upper[i, k] - lower[i, k]) * restart_unit(key, (r - has_first) * D + k)
+            c = nearest_obstacle(g, prm, centers, radii, nbr, b, wall_floor(g, lower, upper, wall, i), -1.0)[0]
+            if c > top:
+                top = c
+                for k in range(D):
+                    x[k] = g[k]
     c = converge_from(x, g, best, i, b, lower, upper, wall, prm, centers, radii, nbr, steps, h)
     if polish == 0 or c > clearance[i]:
         clearance[i] = c

@@ -146,11 +146,12 @@ class Prototypes:
         """Points (k, d) and clearances (k,) of prototypes ``ids``, on the host."""
         raise NotImplementedError
 
-    def move(self, ids, centers, radii, steps, starts=None, polish=False):
+    def move(self, ids, centers, radii, steps, restarts=None, polish=False):
         """Converge prototypes ``ids`` among the spheres ``centers`` (m, d), ``radii`` (m,).
 
-        Each starts from the best (largest clearance) of its current point and its ``starts``
-        (t, k, d), if given, and follows the cooling schedule ``steps`` (T,). ``polish=False``: the
+        Each starts from the best (largest clearance) of its current point and the starts of
+        ``restarts`` (a :class:`~ndpack.backends.restarts.Restarts`), if given, and follows the
+        cooling schedule ``steps`` (T,). ``polish=False``: the
         result replaces the prototype, which is marked unpolished (the spheres changed).
         ``polish=True``: it replaces it only where the clearance grew, and marks it polished.
         """
@@ -236,9 +237,10 @@ class HostPrototypes(Prototypes):
         ids = np.flatnonzero(nearest >= 0)
         return ids, self.points[ids], nearest[ids]
 
-    def move(self, ids, centers, radii, steps, starts=None, polish=False):
+    def move(self, ids, centers, radii, steps, restarts=None, polish=False):
         backend, shape = self.backend, self.shape
         lower, upper = self.cell_lower[ids], self.cell_upper[ids]
+        starts = None if restarts is None else restarts.points(ids, lower, upper)
         neighbours, self.reach[ids] = backend.near_spheres(lower, upper, self.reach[ids], centers, radii,
                                                            return_bound=True)
         points, clearance = backend.converge(shape, self.points[ids], lower, upper, centers, radii, neighbours,
@@ -302,6 +304,7 @@ class DevicePrototypes(Prototypes):
                         device.empty(count, "point"), device.empty(count, "index"))
         self.d_counter, self.d_top = device.empty(1, "index"), device.empty(1, "float")
         self.d_scratch = device.empty((1, 1), "index")  # the unused table of a bound-only index query
+        self.d_no_first = device.empty(1, "point")  # the first points of a move that has none
         self.d_nearest = None  # (n, 1): the touched query's nearest new sphere per prototype
         self.sphere_index = DeviceIndex(self.dim, device)
         self.width = self.FIRST_WIDTH
@@ -458,19 +461,23 @@ class DevicePrototypes(Prototypes):
                 return d_centers, d_radii, table
             self.width = int(widest[0])
 
-    def move(self, ids, centers, radii, steps, starts=None, polish=False):
+    def move(self, ids, centers, radii, steps, restarts=None, polish=False):
         count = len(ids)
         if count == 0:
             return
         device = self.device
         d_ids = device.upload(ids, "index")
         d_centers, d_radii, table = self._neighbours(ids, d_ids, centers, radii)
-        tries = 0 if starts is None else len(starts)
-        d_starts = device.upload(starts if tries else np.zeros((1, count, self.dim)), "point")
+        # The random starts are drawn in the kernel (ndpack.backends.restarts): only the first
+        # points, where there are any, are copied up.
+        first = None if restarts is None else restarts.first
+        tries, stream = (0, 0) if restarts is None else (restarts.tries, restarts.stream)
+        d_first = self.d_no_first if first is None else device.upload(first, "point")
         key = (id(steps), len(steps))
         if key not in self._steps:  # the driver's two schedules: copy each once
             self._steps[key] = (steps, device.upload(steps, "float"))
         spread = lane_spread(count, self.spread)
-        device.launch("move_ids", spread * count, d_ids, d_starts, tries, self.d_points, self.d_clearance,
+        device.launch("move_ids", spread * count, d_ids, d_first, int(first is not None), tries, np.uint64(stream),
+                      self.d_points, self.d_clearance,
                       self.d_polished, self.d_lower, self.d_upper, self.d_wall, device.params, d_centers, d_radii,
                       table, self._steps[key][1], device.h, int(polish), spread)

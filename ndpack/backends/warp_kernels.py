@@ -445,13 +445,44 @@ def set_floats(ids: wp.array(dtype=wp.int32), values: wp.array(dtype=F), out: wp
     out[ids[b]] = values[b]
 
 
+@wp.func
+def restart_mix(h: wp.uint64):
+    """MurmurHash3's finaliser of a 32-bit word held in 64 bits (ndpack.backends.restarts)."""
+    h = h ^ (h >> wp.uint64(16))
+    h = (h * wp.uint64(0x85EBCA6B)) & wp.uint64(0xFFFFFFFF)
+    h = h ^ (h >> wp.uint64(13))
+    h = (h * wp.uint64(0xC2B2AE35)) & wp.uint64(0xFFFFFFFF)
+    return h ^ (h >> wp.uint64(16))
+
+
+@wp.func
+def restart_key(stream: wp.uint64, i: int):
+    """Prototype ``i``'s hash in a restart's ``stream``."""
+    word = wp.uint64(i) & wp.uint64(0xFFFFFFFF)
+    return restart_mix((stream + word * wp.uint64(0x9E3779B9)) & wp.uint64(0xFFFFFFFF))
+
+
+@wp.func
+def restart_point(key: wp.uint64, t: int, lower: VecD, upper: VecD):
+    """Random point ``t`` of a prototype's cell ``lower``-``upper`` from its hash ``key``."""
+    y = VecD()
+    for k in range(D):
+        counter = wp.uint64(t * D + k + 1)
+        word = restart_mix((key + counter * wp.uint64(0x9E3779B9)) & wp.uint64(0xFFFFFFFF))
+        unit = F(wp.float64(word) * wp.float64(2.3283064365386963e-10))  # 2**-32: exact in float64
+        y[k] = lower[k] + (upper[k] - lower[k]) * unit
+    return y
+
+
 @wp.kernel
-def move_ids(ids: wp.array(dtype=wp.int32), starts: wp.array2d(dtype=VecD), tries: int, points: wp.array(dtype=VecD),
-             clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD),
-             upper: wp.array(dtype=VecD), wall: wp.array(dtype=F), prm: wp.array(dtype=F),
-             centers: wp.array(dtype=VecD), radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32),
-             steps: wp.array(dtype=F), h: F, polish: int, spread: int):
-    """Move prototype ``ids[b]`` in place: from the best of its point and ``starts[:tries, b]``,
+def move_ids(ids: wp.array(dtype=wp.int32), first: wp.array(dtype=VecD), has_first: int, tries: int,
+             stream: wp.uint64, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
+             polished: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
+             wall: wp.array(dtype=F), prm: wp.array(dtype=F), centers: wp.array(dtype=VecD),
+             radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32), steps: wp.array(dtype=F), h: F, polish: int,
+             spread: int):
+    """Move prototype ``ids[b]`` in place: from the best of its point, ``first[b]`` (clipped to its
+    cell, where ``has_first``) and ``tries`` random points of its cell drawn from ``stream``,
     converge; keep the result (``polish`` 0), or keep it only if better and mark it polished (1).
     Thread ``b * spread`` moves it; the ``spread - 1`` threads after it idle (see
     :func:`ndpack.backends.prototypes.lane_spread`)."""
@@ -461,11 +492,18 @@ def move_ids(ids: wp.array(dtype=wp.int32), starts: wp.array2d(dtype=VecD), trie
     b = t // spread
     i = ids[b]
     x = points[i]
-    if tries > 0:
+    if has_first + tries > 0:
         top, nearest, bound, feature = nearest_obstacle(x, prm, centers, radii, nbr, b,
                                                         wall_floor(x, lower[i], upper[i], wall[i]), F(-1.0))
-        for t in range(tries):
-            y = starts[t, b]
+        key = restart_key(stream, i)
+        for r in range(has_first + tries):
+            y = VecD()
+            if r < has_first:
+                y = first[b]
+                for k in range(D):
+                    y[k] = wp.min(wp.max(y[k], lower[i][k]), upper[i][k])
+            else:
+                y = restart_point(key, r - has_first, lower[i], upper[i])
             c, s, bound, f = nearest_obstacle(y, prm, centers, radii, nbr, b,
                                               wall_floor(y, lower[i], upper[i], wall[i]), F(-1.0))
             if c > top:
