@@ -39,7 +39,6 @@ def main():
         store = backend.prototypes(box, lower, upper, reach.copy(), points, rng.random(cells) * 2 - 0.2)
         started = time.perf_counter()
         for count in (spheres // 3, spheres // 2, spheres):
-            store.reach[:] = reach
             store.device.write(store.d_reach, 0, reach, "float")
             for start in range(0, cells, CHUNK):
                 ids = np.arange(start, min(start + CHUNK, cells))

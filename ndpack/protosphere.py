@@ -209,6 +209,7 @@ class RunState:
         self.key, self.serial = key, 0
         # A float32 backend's clearances are good to about 1e-7 of the scale: it asks for more.
         self.margin = max(SAFETY_MARGIN, getattr(backend, "margin", SAFETY_MARGIN)) * shape.scale
+        self.wall_slack = WALL_SLACK * self.margin  # the walls' allowance for rounding (cell_bounds)
         self.count = 0
         self.centers = np.empty((64, self.dim))
         self.radii = np.empty(64)
@@ -233,7 +234,8 @@ class RunState:
         keep = reach > 0
         cells = {"lower": cell_lower[keep], "upper": cell_lower[keep] + cell_size, "reach": reach[keep],
                  "wall": wall[keep]}
-        starts = self._restarts(centres[keep]).points(np.arange(len(cells["lower"])), cells["lower"], cells["upper"])
+        starts = self._restarts(centres[keep]).points(np.arange(len(cells["lower"])), cells["lower"], cells["upper"],
+                                                      centres[keep])
         no_spheres = np.zeros((len(cells["lower"]), 0), dtype=np.int64)
         points, clearance = best_starts(self.backend, self.shape, starts, *self.spheres, no_spheres)
         alive = clearance > 0
@@ -326,7 +328,7 @@ class RunState:
         centres = 0.5 * (lower + upper)
         centre_distance = self._distance(centres)
         half_diagonal = 0.5 * np.linalg.norm(upper - lower, axis=1)
-        return centres, -centre_distance + half_diagonal, -centre_distance - WALL_SLACK * self.margin
+        return centres, -centre_distance + half_diagonal, -centre_distance - self.wall_slack
 
     def _distance(self, points):
         """The shape's signed distance at ``points`` (k, d): (k,) float64, on the backend where it
@@ -334,14 +336,6 @@ class RunState:
         if getattr(self.backend, "precision", "float64") == "float64":
             return self.backend.distance(self.shape, points)
         return self.shape._distance(points)
-
-    @property
-    def cell_lower(self):
-        return self.prototypes.cell_lower
-
-    @property
-    def cell_upper(self):
-        return self.prototypes.cell_upper
 
     def _restarts(self, first=None, tries=None) -> Restarts:
         """The next restart of the run: ``first`` (k, d) (or None) and ``tries`` random points

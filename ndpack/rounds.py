@@ -113,8 +113,8 @@ class Fast:
     """Fast mode: every candidate within ``window`` of the frontier becomes a sphere where it is
     disjoint from the larger ones, and cells split where their gaps have become small.
 
-    Keeps, per cell, its longest side and an upper bound of its clearance (so that a round
-    looks only at cells that may split), and the last round's frontier. With ``polish_ahead``
+    Keeps the last round's frontier; the prototype store keeps, per cell, its longest side and
+    an upper bound of its clearance (so that a round looks only at cells that may split). With ``polish_ahead``
     (a fraction, see ``POLISH_AHEAD``) each round ends by polishing the unpolished prototypes
     above that fraction of its frontier; None polishes only the candidates a choice keeps.
     """
@@ -124,10 +124,7 @@ class Fast:
     def __init__(self, state, window: float = FAST_WINDOW, ratio: float = SPLIT_RATIO,
                  polish_ahead: float | None = None):
         self.window, self.ratio, self.polish_ahead = window, ratio, polish_ahead
-        store = state.prototypes
         self.frontier = np.inf  # the last round's largest clearance, late finds aside
-        self.longest = (store.cell_upper - store.cell_lower).max(axis=1)
-        self.bound = store.reach.copy()
 
     def choose(self, state, min_radius, room):
         """Every candidate within the window below the frontier or above it, largest first, kept
@@ -203,61 +200,23 @@ class Fast:
             if state.out_of_time():  # the run ends after this round: split no more
                 break
             low = (1 - self.window) * top
-            ids = np.flatnonzero((self.longest > max(self.ratio * top, 1e3 * state.margin)) & (self.bound >= low))
-            if len(ids) == 0:
-                break
-            points, clearance = store.gather(ids)
-            if touched is not None:  # not moved yet: the clearance at their point, with the new spheres
-                hit = np.isin(ids, touched.ids)
-                rows = np.searchsorted(touched.ids, ids[hit])
-                clearance[hit] = np.minimum(clearance[hit], touched.gap[rows])
-            lower, upper = store.cell_lower[ids], store.cell_upper[ids]
-            # Clearance is 1-Lipschitz: nowhere in the cell above the prototype's plus the way
-            # to the farthest corner (tighter than the stored reach for cells not moved lately).
-            farthest = np.maximum(points - lower, upper - points)
-            bound = np.minimum(store.reach[ids], clearance + np.linalg.norm(farthest, axis=1))
-            self.bound[ids] = np.minimum(self.bound[ids], bound)
-            keep = np.flatnonzero(bound >= low)
+            touched_ids, touched_gap = (None, None) if touched is None else (touched.ids, touched.gap)
+            ids, bound = store.split_candidates(low, max(self.ratio * top, 1e3 * state.margin), touched_ids,
+                                                touched_gap)
             allowed = max(0, MAX_PROTOTYPES - len(store))
             if most is not None:
                 allowed = min(allowed, most - total)
-            if len(keep) > allowed:  # the largest bounds first
-                keep = np.sort(keep[np.argsort(-bound[keep], kind="stable")[:allowed]])
-            ids = ids[keep]
+            if len(ids) > allowed:  # the largest bounds first
+                ids = np.sort(ids[np.argsort(-bound, kind="stable")[:allowed]])
             if len(ids) == 0:
                 break
-            new, centres = self._split(state, ids, points[keep], (upper - lower)[keep])
-            if touched is not None:
-                state.reconverge(np.concatenate([touched.ids, new]), np.concatenate([touched.pushed, centres]))
+            new = store.split_cells(ids, state.cell_bounds, state.wall_slack)
+            if touched is not None:  # their first points first; the new ones start at their centres
+                state.reconverge(np.concatenate([touched.ids, new]), touched.pushed)
                 touched = None
             else:
                 state.reconverge(new)
-            changed = np.concatenate([ids, new])
-            self.longest = np.concatenate([self.longest, np.empty(len(new))])
-            self.bound = np.concatenate([self.bound, np.empty(len(new))])
-            self.longest[changed] = (store.cell_upper[changed] - store.cell_lower[changed]).max(axis=1)
-            self.bound[changed] = store.reach[changed]
             total += len(ids)
         if touched is not None:  # no cell split: the touched restart alone
             state.reconverge(touched.ids, touched.pushed)
         return total
-
-    def _split(self, state, ids, points, sides):
-        """Split cells ``ids`` in two across their longest side; the half that holds the prototype
-        (``points``) keeps it, still a local maximum there, and the other half gets a new one, at
-        its centre, not converged yet. Returns the new prototypes' ids (j,) and centres (j, d)."""
-        store = state.prototypes
-        rows, axis = np.arange(len(ids)), np.argmax(sides, axis=1)
-        lower, upper = store.cell_lower[ids], store.cell_upper[ids]
-        middle = 0.5 * (lower[rows, axis] + upper[rows, axis])
-        low_half = points[rows, axis] < middle
-        kept_lower, kept_upper, other_lower, other_upper = lower.copy(), upper.copy(), lower.copy(), upper.copy()
-        kept_upper[rows, axis] = np.where(low_half, middle, upper[rows, axis])
-        kept_lower[rows, axis] = np.where(low_half, lower[rows, axis], middle)
-        other_lower[rows, axis] = np.where(low_half, middle, lower[rows, axis])
-        other_upper[rows, axis] = np.where(low_half, upper[rows, axis], middle)
-        new_lower, new_upper = np.concatenate([kept_lower, other_lower]), np.concatenate([kept_upper, other_upper])
-        centres, reach, wall = state.cell_bounds(new_lower, new_upper)
-        reach = np.minimum(np.tile(store.reach[ids], 2), reach)
-        centres = centres[len(ids):]
-        return store.split(ids, new_lower, new_upper, reach, wall, centres, np.full(len(ids), -np.inf)), centres

@@ -60,16 +60,19 @@ def test_restart_points_lie_in_the_cells_and_do_not_depend_on_the_chunking():
     rng = np.random.default_rng(1)
     lower = rng.uniform(-1, 0, (50, 2))
     upper = lower + rng.uniform(0.01, 1, (50, 2))
-    first = rng.uniform(-2, 2, (50, 2))
+    current = lower + 0.5 * (upper - lower)
+    first = rng.uniform(-2, 2, (30, 2))  # for the first 30 prototypes; the others have none
     restarts = Restarts(stream(99, 1), 5, first)
     ids = np.arange(100, 150)
-    points = restarts.points(ids, lower, upper)
+    points = restarts.points(ids, lower, upper, current)
     assert points.shape == (6, 50, 2)
     assert np.all(points >= lower) and np.all(points <= upper)
-    np.testing.assert_array_equal(points[0], np.clip(first, lower, upper))
-    half = slice(20, 50)
-    np.testing.assert_array_equal(restarts.part(half).points(ids[half], lower[half], upper[half]), points[:, half])
-    assert Restarts(1, 0).points(ids, lower, upper) is None
+    np.testing.assert_array_equal(points[0, :30], np.clip(first, lower[:30], upper[:30]))
+    np.testing.assert_array_equal(points[0, 30:], current[30:])  # their current point: changes nothing
+    for part, rows in ((slice(20, 50), slice(None)), (slice(35, 50), slice(1, None))):  # the last: no first points
+        np.testing.assert_array_equal(
+            restarts.part(part).points(ids[part], lower[part], upper[part], current[part]), points[rows, part])
+    assert Restarts(1, 0).points(ids, lower, upper, current) is None
 
 
 def test_the_seed_still_chooses_the_packing():

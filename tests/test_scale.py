@@ -227,8 +227,7 @@ def test_device_index_finds_what_the_reference_finds(name, precision):
     store = backend.prototypes(nd.Box(np.zeros(dim), 3 * np.ones(dim)), lower, upper, reach, points, clearance)
     ids = np.arange(cells)
     for count in (1, 20, 40, 700, 900, 1500):  # mirrored incrementally, rebuilt past its capacity
-        store.reach[:] = reach  # the store tightens its reach; the reference starts from the same
-        store.device.write(store.d_reach, 0, reach, "float")
+        store.device.write(store.d_reach, 0, reach, "float")  # the store tightens its reach: start again
         _, d_radii, table = store._neighbours(ids, store.device.upload(ids, "index"), centers[:count],
                                               radii[:count])
         got = np.sort(table.numpy() if hasattr(table, "numpy") else table.copy_to_host(), axis=1).astype(np.int64)

@@ -102,6 +102,81 @@ def touched_index_select(points, clearance, polished, centers, radii, origin, to
             out_flags[slot] = nearest[i, 0]
 
 
+def lowered_clearance(i, c, ids, gaps, count):
+    lo = 0
+    hi = count
+    while lo < hi:  # bisection: the first position whose id is not below i
+        middle = (lo + hi) // 2
+        if ids[middle] < i:
+            lo = middle + 1
+        else:
+            hi = middle
+    if lo < count and ids[lo] == i:
+        return min(c, gaps[lo])
+    return c
+
+
+def split_mark(lower, upper, reach, points, clearance, bound, low, longest, touched_ids, touched_gap,
+               touched_count, counter, out_ids, out_values, out_points, out_flags):
+    i = cuda.grid(1)
+    if i < clearance.shape[0]:
+        side = upper[i, 0] - lower[i, 0]
+        for k in range(1, D):
+            side = max(side, upper[i, k] - lower[i, k])
+        if side > longest and bound[i] >= low:
+            c = lowered_clearance(i, clearance[i], touched_ids, touched_gap, touched_count)
+            far2 = 0.0
+            for k in range(D):
+                far = max(points[i, k] - lower[i, k], upper[i, k] - points[i, k])
+                far2 += far * far
+            b = min(reach[i], c + math.sqrt(far2))
+            bound[i] = min(bound[i], b)
+            if b >= low:
+                slot = cuda.atomic.add(counter, 0, 1)
+                out_ids[slot] = i
+                out_values[slot] = b
+
+
+def split_apply(ids, lower, upper, reach, wall, points, clearance, polished, bound, prm, first_new, wall_slack):
+    b = cuda.grid(1)
+    if b < ids.shape[0]:
+        i = ids[b]
+        j = first_new + b
+        axis = 0
+        side = upper[i, 0] - lower[i, 0]
+        for k in range(1, D):
+            if upper[i, k] - lower[i, k] > side:
+                axis = k
+                side = upper[i, k] - lower[i, k]
+        middle = 0.5 * (lower[i, axis] + upper[i, axis])
+        low_half = points[i, axis] < middle
+        for k in range(D):
+            lower[j, k] = lower[i, k]
+            upper[j, k] = upper[i, k]
+        if low_half:
+            upper[i, axis] = middle
+            lower[j, axis] = middle
+        else:
+            lower[i, axis] = middle
+            upper[j, axis] = middle
+        parent = reach[i]
+        centre = point()
+        for row in (i, j):
+            half2 = 0.0
+            for k in range(D):
+                centre[k] = 0.5 * (lower[row, k] + upper[row, k])
+                side = upper[row, k] - lower[row, k]
+                half2 += side * side
+            distance = sd(centre, prm)
+            reach[row] = min(parent, -distance + 0.5 * math.sqrt(half2))
+            wall[row] = -distance - wall_slack
+            bound[row] = reach[row]
+        for k in range(D):
+            points[j, k] = centre[k]
+        clearance[j] = -math.inf
+        polished[j] = 0
+
+
 def gather_ids(ids, points, clearance, out_points, out_clearance):
     b = cuda.grid(1)
     if b < ids.shape[0]:
@@ -138,30 +213,23 @@ def near_finish(found, sphere_count, width, out):
         cuda.atomic.max(width, 0, found[b])
 
 
-def set_points(ids, values, out):
-    b = cuda.grid(1)
-    if b < ids.shape[0]:
-        for k in range(D):
-            out[ids[b], k] = values[b, k]
-
-
 def set_floats(ids, values, out):
     b = cuda.grid(1)
     if b < ids.shape[0]:
         out[ids[b]] = values[b]
 
 
-def move_ids(ids, first, has_first, tries, stream, points, clearance, polished, lower, upper, wall, prm, centers,
+def move_ids(ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper, wall, prm, centers,
              radii, nbr, steps, h, polish, spread):
     t = cuda.grid(1)
     b = t // spread
     if t % spread == 0 and b < ids.shape[0]:
-        move_one(b, ids, first, has_first, tries, stream, points, clearance, polished, lower, upper, wall, prm,
+        move_one(b, ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper, wall, prm,
                  centers, radii, nbr, steps, h, polish)
 '''
 ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
                "select_all", "max_all", "touched_index_select", "gather_ids", "index_bound_ids", "index_fill_ids",
-               "near_finish", "move_ids", "set_points", "set_floats")
+               "near_finish", "move_ids", "set_floats", "split_mark", "split_apply")
 THREADS_PER_BLOCK = 128
 
 

@@ -210,10 +210,10 @@ def restart_unit(key, counter):
     return float(word) * 2.3283064365386963e-10  # 2**-32: exact in float64
 
 
-def move_one(b, ids, first, has_first, tries, stream, points, clearance, polished, lower, upper, wall, prm, centers,
+def move_one(b, ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper, wall, prm, centers,
              radii, nbr, steps, h, polish):
     """Move prototype ``ids[b]`` in place: from the best of its point, ``first[b]`` (clipped to
-    its cell, where ``has_first``) and ``tries`` random points of its cell drawn from
+    its cell, where ``b < first_rows``) and ``tries`` random points of its cell drawn from
     ``stream``, converge; keep the result (``polish`` 0), or keep it only if better and mark it
     polished (1)."""
     i = ids[b]
@@ -222,15 +222,16 @@ def move_one(b, ids, first, has_first, tries, stream, points, clearance, polishe
     best = point()
     for k in range(D):
         x[k] = points[i, k]
-    if has_first + tries > 0:
+    lead = 1 if b < first_rows else 0
+    if lead + tries > 0:
         top = nearest_obstacle(x, prm, centers, radii, nbr, b, wall_floor(x, lower, upper, wall, i), -1.0)[0]
         key = restart_key(stream, i)
-        for r in range(has_first + tries):
+        for r in range(lead + tries):
             for k in range(D):
-                if r < has_first:
+                if r < lead:
                     g[k] = min(max(first[b, k], lower[i, k]), upper[i, k])
                 else:
-                    g[k] = lower[i, k] + (upper[i, k] - lower[i, k]) * restart_unit(key, (r - has_first) * D + k)
+                    g[k] = lower[i, k] + (upper[i, k] - lower[i, k]) * restart_unit(key, (r - lead) * D + k)
             c = nearest_obstacle(g, prm, centers, radii, nbr, b, wall_floor(g, lower, upper, wall, i), -1.0)[0]
             if c > top:
                 top = c

@@ -87,17 +87,14 @@ class Prototypes:
         Lower bound of the boundary's distance at each cell's centre (see
         :meth:`~ndpack.backends.base.Backend.converge`); None evaluates the shape everywhere.
 
-    The cell arrays stay on the host too (the driver draws random restarts in them); points,
-    clearances and polish flags belong to the subclass.
+    Where the arrays live, and how the cells split, belongs to the subclass.
     """
 
     def __init__(self, cell_lower, cell_upper, reach, points, clearance, wall=None):
-        self.cell_lower, self.cell_upper, self.reach = cell_lower, cell_upper, reach
-        self.wall = no_wall(len(reach)) if wall is None else np.asarray(wall, dtype=np.float64)
         self.dim = cell_lower.shape[1]
 
     def __len__(self) -> int:
-        return len(self.reach)
+        raise NotImplementedError
 
     def select(self, low=-np.inf, high=np.inf, unpolished=False):
         """Ids of the prototypes with ``low <= clearance <= high`` (and not polished, if asked),
@@ -150,10 +147,11 @@ class Prototypes:
         """Converge prototypes ``ids`` among the spheres ``centers`` (m, d), ``radii`` (m,).
 
         Each starts from the best (largest clearance) of its current point and the starts of
-        ``restarts`` (a :class:`~ndpack.backends.restarts.Restarts`), if given, and follows the
-        cooling schedule ``steps`` (T,). ``polish=False``: the
-        result replaces the prototype, which is marked unpolished (the spheres changed).
-        ``polish=True``: it replaces it only where the clearance grew, and marks it polished.
+        ``restarts`` (a :class:`~ndpack.backends.restarts.Restarts`; its first points belong to
+        the first ids), if given, and follows the cooling schedule ``steps`` (T,).
+        ``polish=False``: the result replaces the prototype, which is marked unpolished (the
+        spheres changed). ``polish=True``: it replaces it only where the clearance grew, and
+        marks it polished.
         """
         raise NotImplementedError
 
@@ -161,32 +159,52 @@ class Prototypes:
         """Every point (n, d) and clearance (n,) on the host: for results, not for rounds."""
         return self.gather(np.arange(len(self)))
 
-    def split(self, ids, lower, upper, reach, wall, points, clearance):
-        """Cells cut in two: cells ``ids`` (k,) shrink to the first k rows of ``lower``, ``upper``
-        (k + j, d), ``reach`` and ``wall`` (k + j,), keeping their prototypes (which lie inside),
-        and j new prototypes get the remaining rows' cells, starting at ``points`` (j, d) with
-        ``clearance`` (j,).
+    def split_candidates(self, low, longest, touched_ids=None, touched_gap=None):
+        """The cells the fast mode may split: longer than ``longest`` on some side, and whose bound
+        of the clearance anywhere inside reaches ``low``.
 
-        Returns the new prototypes' ids (j,) int64.
+        The bound is kept per cell and only tightens (clearances only shrink as spheres arrive):
+        ``min(reach, clearance + the way from the prototype to the cell's farthest corner)``, the
+        clearance being 1-Lipschitz, with the clearance of the prototypes ``touched_ids`` (m,)
+        ascending lowered to ``touched_gap`` (m,) (their gap to the new spheres, before they move).
+
+        Returns ids (k,) int64 ascending and their bounds (k,) float64.
         """
-        count = len(ids)
-        self.cell_lower[ids], self.cell_upper[ids] = lower[:count], upper[:count]
-        self.reach[ids], self.wall[ids] = reach[:count], wall[:count]
-        self.cell_lower = np.concatenate([self.cell_lower, lower[count:]])
-        self.cell_upper = np.concatenate([self.cell_upper, upper[count:]])
-        self.reach = np.concatenate([self.reach, reach[count:]])
-        self.wall = np.concatenate([self.wall, wall[count:]])
-        return np.arange(len(self.reach) - len(points), len(self.reach))
+        raise NotImplementedError
+
+    def split_cells(self, ids, cell_bounds, wall_slack):
+        """Cut cells ``ids`` (k,) ascending in two across their longest side (the first of equal
+        sides), at the middle. The half that holds the prototype keeps it (still a local maximum
+        there); the other half gets a new prototype at its centre, with clearance -inf, not
+        converged: ids ``len(self)`` on, in the order of ``ids``. Each half's reach and wall come
+        from the distance at its centre (``cell_bounds(lower, upper) -> centres, reach, wall``
+        does it on the host; a device uses ``wall_slack``, the wall's allowance for rounding),
+        the reach no more than the cell's before.
+
+        Returns the new prototypes' ids (k,) int64.
+        """
+        raise NotImplementedError
 
 
 class HostPrototypes(Prototypes):
-    """Prototypes in host memory; the heavy work runs through the backend's array operations."""
+    """Prototypes in host memory; the heavy work runs through the backend's array operations.
+
+    Every array is an attribute: ``cell_lower``, ``cell_upper`` (n, d), ``reach``, ``wall``,
+    ``points`` (n, d), ``clearance``, ``polished`` (n,), and the fast mode's per-cell ``longest``
+    side and split ``bound`` (n,), made at its first :meth:`split_candidates`.
+    """
 
     def __init__(self, backend, shape, cell_lower, cell_upper, reach, points, clearance, wall=None):
         super().__init__(cell_lower, cell_upper, reach, points, clearance, wall)
         self.backend, self.shape = backend, shape
+        self.cell_lower, self.cell_upper, self.reach = cell_lower, cell_upper, reach
+        self.wall = no_wall(len(reach)) if wall is None else np.asarray(wall, dtype=np.float64)
         self.points, self.clearance = points, clearance
         self.polished = np.zeros(len(points), dtype=bool)
+        self.longest = self.bound = None
+
+    def __len__(self) -> int:
+        return len(self.reach)
 
     def select(self, low=-np.inf, high=np.inf, unpolished=False):
         mask = (self.clearance >= low) & (self.clearance <= high)
@@ -225,11 +243,53 @@ class HostPrototypes(Prototypes):
     def gather(self, ids):
         return self.points[ids], self.clearance[ids]
 
-    def split(self, ids, lower, upper, reach, wall, points, clearance):
-        new = super().split(ids, lower, upper, reach, wall, points, clearance)
-        self.points = np.concatenate([self.points, points])
-        self.clearance = np.concatenate([self.clearance, clearance])
-        self.polished = np.concatenate([self.polished, np.zeros(len(points), dtype=bool)])
+    def split_candidates(self, low, longest, touched_ids=None, touched_gap=None):
+        if self.bound is None:
+            self.longest = (self.cell_upper - self.cell_lower).max(axis=1)
+            self.bound = self.reach.copy()
+        ids = np.flatnonzero((self.longest > longest) & (self.bound >= low))
+        points, clearance = self.gather(ids)
+        if touched_ids is not None:  # not moved yet: the clearance at their point, with the new spheres
+            hit = np.isin(ids, touched_ids)
+            rows = np.searchsorted(touched_ids, ids[hit])
+            clearance[hit] = np.minimum(clearance[hit], touched_gap[rows])
+        lower, upper = self.cell_lower[ids], self.cell_upper[ids]
+        farthest = np.maximum(points - lower, upper - points)
+        bound = np.minimum(self.reach[ids], clearance + np.linalg.norm(farthest, axis=1))
+        self.bound[ids] = np.minimum(self.bound[ids], bound)
+        keep = bound >= low
+        return ids[keep], bound[keep]
+
+    def split_cells(self, ids, cell_bounds, wall_slack):
+        count, rows = len(ids), np.arange(len(ids))
+        points, lower, upper = self.points[ids], self.cell_lower[ids], self.cell_upper[ids]
+        axis = np.argmax(upper - lower, axis=1)
+        middle = 0.5 * (lower[rows, axis] + upper[rows, axis])
+        low_half = points[rows, axis] < middle
+        kept_lower, kept_upper, other_lower, other_upper = lower.copy(), upper.copy(), lower.copy(), upper.copy()
+        kept_upper[rows, axis] = np.where(low_half, middle, upper[rows, axis])
+        kept_lower[rows, axis] = np.where(low_half, lower[rows, axis], middle)
+        other_lower[rows, axis] = np.where(low_half, middle, lower[rows, axis])
+        other_upper[rows, axis] = np.where(low_half, upper[rows, axis], middle)
+        new_lower, new_upper = np.concatenate([kept_lower, other_lower]), np.concatenate([kept_upper, other_upper])
+        centres, reach, wall = cell_bounds(new_lower, new_upper)
+        reach = np.minimum(np.tile(self.reach[ids], 2), reach)
+        self.cell_lower[ids], self.cell_upper[ids] = kept_lower, kept_upper
+        self.reach[ids], self.wall[ids] = reach[:count], wall[:count]
+        self.cell_lower = np.concatenate([self.cell_lower, other_lower])
+        self.cell_upper = np.concatenate([self.cell_upper, other_upper])
+        self.reach = np.concatenate([self.reach, reach[count:]])
+        self.wall = np.concatenate([self.wall, wall[count:]])
+        self.points = np.concatenate([self.points, centres[count:]])
+        self.clearance = np.concatenate([self.clearance, np.full(count, -np.inf)])
+        self.polished = np.concatenate([self.polished, np.zeros(count, dtype=bool)])
+        new = np.arange(len(self.reach) - count, len(self.reach))
+        if self.bound is not None:
+            changed = np.concatenate([ids, new])
+            self.longest = np.concatenate([self.longest, np.empty(count)])
+            self.bound = np.concatenate([self.bound, np.empty(count)])
+            self.longest[changed] = (self.cell_upper[changed] - self.cell_lower[changed]).max(axis=1)
+            self.bound[changed] = self.reach[changed]
         return new
 
     def touched(self, new_centers, new_radii):
@@ -240,7 +300,7 @@ class HostPrototypes(Prototypes):
     def move(self, ids, centers, radii, steps, restarts=None, polish=False):
         backend, shape = self.backend, self.shape
         lower, upper = self.cell_lower[ids], self.cell_upper[ids]
-        starts = None if restarts is None else restarts.points(ids, lower, upper)
+        starts = None if restarts is None else restarts.points(ids, lower, upper, self.points[ids])
         neighbours, self.reach[ids] = backend.near_spheres(lower, upper, self.reach[ids], centers, radii,
                                                            return_bound=True)
         points, clearance = backend.converge(shape, self.points[ids], lower, upper, centers, radii, neighbours,
@@ -274,7 +334,7 @@ class DevicePrototypes(Prototypes):
         device array: the rows of ``array``, then ``host``'s). Kinds are ``"float"``, ``"point"`` and
         ``"index"``. The kernels are ``max_all``, ``select_all``, ``touched_index_select``,
         ``gather_ids``, ``index_bound_ids``, ``index_fill_ids``, ``near_finish``, ``move_ids``,
-        ``set_points`` and ``set_floats`` of the backend's kernel text.
+        ``set_floats``, ``split_mark`` and ``split_apply`` of the backend's kernel text.
     spread : int
         Most threads per prototype in a move launch (a power of two; see :func:`lane_spread`):
         ``SPREAD_MAX`` on a GPU, 1 on a CPU device, where idle threads would be work.
@@ -298,13 +358,16 @@ class DevicePrototypes(Prototypes):
         self.d_points, self.d_clearance = up(points, "point"), up(clearance, "float")
         self.d_polished = up(np.zeros(count, dtype=np.int64), "index")
         self.d_lower, self.d_upper, self.d_reach = up(cell_lower, "point"), up(cell_upper, "point"), up(reach, "float")
-        self.d_wall = up(self.wall, "float")
+        self.d_wall = up(no_wall(count) if wall is None else wall, "float")
+        self.d_bound = up(reach, "float")  # the fast mode's split bound per cell (see split_candidates)
+        self.count = count
         # Answer buffers of the compacting kernels: at most one row per prototype.
         self.answers = (device.empty(count, "index"), device.empty(count, "float"),
                         device.empty(count, "point"), device.empty(count, "index"))
         self.d_counter, self.d_top = device.empty(1, "index"), device.empty(1, "float")
         self.d_scratch = device.empty((1, 1), "index")  # the unused table of a bound-only index query
         self.d_no_first = device.empty(1, "point")  # the first points of a move that has none
+        self.d_no_ids, self.d_no_gaps = device.empty(1, "index"), device.empty(1, "float")
         self.d_nearest = None  # (n, 1): the touched query's nearest new sphere per prototype
         self.sphere_index = DeviceIndex(self.dim, device)
         self.width = self.FIRST_WIDTH
@@ -312,22 +375,51 @@ class DevicePrototypes(Prototypes):
         self._window = FIRST_WINDOW
         self._steps = {}
 
-    def split(self, ids, lower, upper, reach, wall, points, clearance):
-        count = len(ids)
-        new = super().split(ids, lower, upper, reach, wall, points, clearance)
-        device, up = self.device, self.device.upload
-        d_ids = up(ids, "index")
-        # The split cells' rows are rewritten where they are; the new ones are appended on the
-        # device (a device-side copy of the old rows), so nothing comes back to the host.
-        for name, rows, kind in (("d_lower", lower, "point"), ("d_upper", upper, "point"),
-                                 ("d_reach", reach, "float"), ("d_wall", wall, "float")):
-            device.launch(f"set_{kind}s", count, d_ids, up(rows[:count], kind), getattr(self, name))
-            setattr(self, name, device.extend(getattr(self, name), rows[count:], kind))
-        self.d_points = device.extend(self.d_points, points, "point")
-        self.d_clearance = device.extend(self.d_clearance, clearance, "float")
-        self.d_polished = device.extend(self.d_polished, np.zeros(len(points), dtype=np.int64), "index")
-        self.answers = tuple(device.empty(len(self), kind) for kind in ("index", "float", "point", "index"))
-        return new
+    def __len__(self) -> int:
+        return self.count
+
+    # The cells, copied from the device: for inspection and tests, not for rounds.
+    @property
+    def cell_lower(self):
+        return self.device.fetch((self.d_lower, self.count))[0]
+
+    @property
+    def cell_upper(self):
+        return self.device.fetch((self.d_upper, self.count))[0]
+
+    @property
+    def reach(self):
+        return self.device.fetch((self.d_reach, self.count))[0]
+
+    @property
+    def wall(self):
+        return self.device.fetch((self.d_wall, self.count))[0]
+
+    def split_candidates(self, low, longest, touched_ids=None, touched_gap=None):
+        device = self.device
+        if touched_ids is None or len(touched_ids) == 0:
+            d_touched, d_gap, touched = self.d_no_ids, self.d_no_gaps, 0
+        else:
+            d_touched, d_gap, touched = device.upload(touched_ids, "index"), device.upload(touched_gap, "float"), len(touched_ids)
+        ids, bound, _, _, _ = self._compact(
+            "split_mark", self.d_lower, self.d_upper, self.d_reach, self.d_points, self.d_clearance, self.d_bound,
+            float(low), float(longest), d_touched, d_gap, touched, fields=(0, 1))
+        return ids.astype(np.int64), bound
+
+    def split_cells(self, ids, cell_bounds, wall_slack):
+        # On the device: the distance at the halves' centres in the kernel (cell_bounds is the host's way).
+        device, count, first = self.device, len(ids), self.count
+        for name, kind in (("d_lower", "point"), ("d_upper", "point"), ("d_points", "point"), ("d_reach", "float"),
+                           ("d_wall", "float"), ("d_clearance", "float"), ("d_bound", "float"),
+                           ("d_polished", "index")):
+            rows = np.zeros((count, self.dim) if kind == "point" else count)
+            setattr(self, name, device.extend(getattr(self, name), rows, kind))
+        self.count += count
+        device.launch("split_apply", count, device.upload(ids, "index"), self.d_lower, self.d_upper, self.d_reach,
+                      self.d_wall, self.d_points, self.d_clearance, self.d_polished, self.d_bound, device.params, first,
+                      float(wall_slack))
+        self.answers = tuple(device.empty(self.count, kind) for kind in ("index", "float", "point", "index"))
+        return np.arange(first, self.count)
 
     def _compact(self, kernel, *args, fields=(0, 1, 2, 3), top=False):
         """Run a kernel that appends matches, with one synchronisation: ids (m,) ascending, their
@@ -450,8 +542,8 @@ class DevicePrototypes(Prototypes):
             device.launch("index_fill_ids", spread * count, d_ids, self.d_lower, self.d_upper, bound, d_centers,
                           d_radii, *index, found, table, spread)
             device.launch("near_finish", count, found, d_radii.shape[0], self.d_counter, table)
-            widest, self.reach[ids] = device.fetch((self.d_counter, 1), (bound, count))
-            if np.isnan(self.reach[ids]).any():  # index_near met a sphere id beyond the spheres
+            widest, tightened = device.fetch((self.d_counter, 1), (bound, count))
+            if np.isnan(tightened).any():  # index_near met a sphere id beyond the spheres
                 raise RuntimeError(
                     "the device's sphere index is corrupt (a sphere id beyond the spheres); please report "
                     "this with the shape and backend, and use backend='warp' or 'numba' meanwhile"
@@ -477,7 +569,7 @@ class DevicePrototypes(Prototypes):
         if key not in self._steps:  # the driver's two schedules: copy each once
             self._steps[key] = (steps, device.upload(steps, "float"))
         spread = lane_spread(count, self.spread)
-        device.launch("move_ids", spread * count, d_ids, d_first, int(first is not None), tries, np.uint64(stream),
+        device.launch("move_ids", spread * count, d_ids, d_first, 0 if first is None else len(first), tries, np.uint64(stream),
                       self.d_points, self.d_clearance,
                       self.d_polished, self.d_lower, self.d_upper, self.d_wall, device.params, d_centers, d_radii,
                       table, self._steps[key][1], device.h, int(polish), spread)

@@ -71,8 +71,9 @@ def units(stream_: int, ids: np.ndarray, tries: int, dim: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Restarts:
-    """How a move restarts its prototypes: from the best of their current point, ``first`` (if
-    given) and ``tries`` random points of their cells from ``stream``.
+    """How a move restarts its prototypes: from the best of their current point, a first point
+    (for the first ``len(first)`` of them) and ``tries`` random points of their cells from
+    ``stream``.
 
     Attributes
     ----------
@@ -80,8 +81,8 @@ class Restarts:
         The 32-bit stream (:func:`stream`).
     tries : int
         Random points per prototype.
-    first : (k, d) float64 or None
-        A point per prototype tried first, clipped to its cell by the move.
+    first : (j, d) float64 or None
+        A point tried first by each of the move's first ``j`` prototypes, clipped to its cell.
     """
 
     stream: int
@@ -89,15 +90,20 @@ class Restarts:
     first: np.ndarray | None = None
 
     def part(self, rows: slice) -> "Restarts":
-        """The restarts of the prototypes at positions ``rows`` of the move's ids."""
-        return Restarts(self.stream, self.tries, None if self.first is None else self.first[rows])
+        """The restarts of the prototypes at positions ``rows`` (a slice from 0 on) of the move's ids."""
+        first = None if self.first is None else self.first[rows]
+        return Restarts(self.stream, self.tries, first if first is not None and len(first) else None)
 
-    def points(self, ids: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray | None:
-        """The starts of prototypes ``ids`` (k,) in cells ``lower``, ``upper`` (k, d): (t, k, d)
-        float64, ``first`` (clipped) then the random points; None when there are none."""
+    def points(self, ids: np.ndarray, lower: np.ndarray, upper: np.ndarray, current: np.ndarray) -> np.ndarray | None:
+        """The starts of prototypes ``ids`` (k,) in cells ``lower``, ``upper`` (k, d) now at
+        ``current`` (k, d): (t, k, d) float64, the first points (clipped; the current point for
+        prototypes beyond them, which changes nothing) then the random points; None when there
+        are none."""
         parts = []
         if self.first is not None:
-            parts.append(np.clip(self.first, lower, upper)[None])
+            lead = current.copy()
+            lead[: len(self.first)] = self.first
+            parts.append(np.clip(lead, lower, upper)[None])
         if self.tries:
             parts.append(lower + (upper - lower) * units(self.stream, ids, self.tries, lower.shape[1]))
         return np.concatenate(parts) if parts else None

@@ -434,15 +434,106 @@ def near_finish(found: wp.array(dtype=wp.int32), sphere_count: int, width: wp.ar
 
 
 @wp.kernel
-def set_points(ids: wp.array(dtype=wp.int32), values: wp.array(dtype=VecD), out: wp.array(dtype=VecD)):
-    b = wp.tid()
-    out[ids[b]] = values[b]
-
-
-@wp.kernel
 def set_floats(ids: wp.array(dtype=wp.int32), values: wp.array(dtype=F), out: wp.array(dtype=F)):
     b = wp.tid()
     out[ids[b]] = values[b]
+
+
+@wp.func
+def lowered_clearance(i: int, c: F, ids: wp.array(dtype=wp.int32), gaps: wp.array(dtype=F), count: int):
+    """``c``, lowered to ``gaps[j]`` where ``ids[j] == i`` (``ids[:count]`` ascending)."""
+    lo = int(0)
+    hi = count
+    while lo < hi:  # bisection: the first position whose id is not below i
+        middle = (lo + hi) // 2
+        if ids[middle] < i:
+            lo = middle + 1
+        else:
+            hi = middle
+    if lo < count:
+        if ids[lo] == i:
+            return wp.min(c, gaps[lo])
+    return c
+
+
+@wp.kernel
+def split_mark(lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD), reach: wp.array(dtype=F),
+               points: wp.array(dtype=VecD), clearance: wp.array(dtype=F), bound: wp.array(dtype=F), low: F, longest: F, touched_ids: wp.array(dtype=wp.int32),
+               touched_gap: wp.array(dtype=F), touched_count: int, counter: wp.array(dtype=wp.int32),
+               out_ids: wp.array(dtype=wp.int32), out_values: wp.array(dtype=F), out_points: wp.array(dtype=VecD),
+               out_flags: wp.array(dtype=wp.int32)):
+    """Append the cells that may split, with their tightened bounds (the host store's
+    ``split_candidates``); every cell looked at keeps its tighter bound."""
+    i = wp.tid()
+    lo = lower[i]
+    hi = upper[i]
+    side = hi[0] - lo[0]
+    for k in range(1, D):
+        side = wp.max(side, hi[k] - lo[k])
+    if side > longest and bound[i] >= low:
+        c = lowered_clearance(i, clearance[i], touched_ids, touched_gap, touched_count)
+        p = points[i]
+        farthest = VecD()
+        for k in range(D):
+            farthest[k] = wp.max(p[k] - lo[k], hi[k] - p[k])
+        b = wp.min(reach[i], c + wp.length(farthest))
+        bound[i] = wp.min(bound[i], b)
+        if b >= low:
+            slot = wp.atomic_add(counter, 0, 1)
+            out_ids[slot] = i
+            out_values[slot] = b
+
+
+@wp.kernel
+def split_apply(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
+                reach: wp.array(dtype=F), wall: wp.array(dtype=F), points: wp.array(dtype=VecD),
+                clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32), bound: wp.array(dtype=F),
+                prm: wp.array(dtype=F), first_new: int, wall_slack: F):
+    """Cut cell ``ids[b]`` in two across its longest side (the first of equals); the half without
+    its prototype becomes row ``first_new + b``, with a new prototype at its centre (the host
+    store's ``split_cells``)."""
+    b = wp.tid()
+    i = ids[b]
+    j = first_new + b
+    lo = lower[i]
+    hi = upper[i]
+    axis = int(0)
+    side = hi[0] - lo[0]
+    for k in range(1, D):
+        if hi[k] - lo[k] > side:
+            axis = k
+            side = hi[k] - lo[k]
+    middle = F(0.5) * (lo[axis] + hi[axis])
+    kept_lo = lo
+    kept_hi = hi
+    other_lo = lo
+    other_hi = hi
+    if points[i][axis] < middle:
+        kept_hi[axis] = middle
+        other_lo[axis] = middle
+    else:
+        kept_lo[axis] = middle
+        other_hi[axis] = middle
+    parent = reach[i]
+    kept_centre = F(0.5) * (kept_lo + kept_hi)
+    other_centre = F(0.5) * (other_lo + other_hi)
+    kept_distance = sd(kept_centre, prm)
+    other_distance = sd(other_centre, prm)
+    kept_reach = wp.min(parent, -kept_distance + F(0.5) * wp.length(kept_hi - kept_lo))
+    other_reach = wp.min(parent, -other_distance + F(0.5) * wp.length(other_hi - other_lo))
+    lower[i] = kept_lo
+    upper[i] = kept_hi
+    reach[i] = kept_reach
+    wall[i] = -kept_distance - wall_slack
+    bound[i] = kept_reach
+    lower[j] = other_lo
+    upper[j] = other_hi
+    reach[j] = other_reach
+    wall[j] = -other_distance - wall_slack
+    bound[j] = other_reach
+    points[j] = other_centre
+    clearance[j] = -F(wp.inf)
+    polished[j] = 0
 
 
 @wp.func
@@ -475,14 +566,14 @@ def restart_point(key: wp.uint64, t: int, lower: VecD, upper: VecD):
 
 
 @wp.kernel
-def move_ids(ids: wp.array(dtype=wp.int32), first: wp.array(dtype=VecD), has_first: int, tries: int,
+def move_ids(ids: wp.array(dtype=wp.int32), first: wp.array(dtype=VecD), first_rows: int, tries: int,
              stream: wp.uint64, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
              polished: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
              wall: wp.array(dtype=F), prm: wp.array(dtype=F), centers: wp.array(dtype=VecD),
              radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32), steps: wp.array(dtype=F), h: F, polish: int,
              spread: int):
     """Move prototype ``ids[b]`` in place: from the best of its point, ``first[b]`` (clipped to its
-    cell, where ``has_first``) and ``tries`` random points of its cell drawn from ``stream``,
+    cell, where ``b < first_rows``) and ``tries`` random points of its cell drawn from ``stream``,
     converge; keep the result (``polish`` 0), or keep it only if better and mark it polished (1).
     Thread ``b * spread`` moves it; the ``spread - 1`` threads after it idle (see
     :func:`ndpack.backends.prototypes.lane_spread`)."""
@@ -492,18 +583,21 @@ def move_ids(ids: wp.array(dtype=wp.int32), first: wp.array(dtype=VecD), has_fir
     b = t // spread
     i = ids[b]
     x = points[i]
-    if has_first + tries > 0:
+    lead = int(0)
+    if b < first_rows:
+        lead = 1
+    if lead + tries > 0:
         top, nearest, bound, feature = nearest_obstacle(x, prm, centers, radii, nbr, b,
                                                         wall_floor(x, lower[i], upper[i], wall[i]), F(-1.0))
         key = restart_key(stream, i)
-        for r in range(has_first + tries):
+        for r in range(lead + tries):
             y = VecD()
-            if r < has_first:
+            if r < lead:
                 y = first[b]
                 for k in range(D):
                     y[k] = wp.min(wp.max(y[k], lower[i][k]), upper[i][k])
             else:
-                y = restart_point(key, r - has_first, lower[i], upper[i])
+                y = restart_point(key, r - lead, lower[i], upper[i])
             c, s, bound, f = nearest_obstacle(y, prm, centers, radii, nbr, b,
                                               wall_floor(y, lower[i], upper[i], wall[i]), F(-1.0))
             if c > top:
