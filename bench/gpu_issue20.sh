@@ -6,7 +6,8 @@
 #   xz -9 -c ../shared/data/meshes/armadillo.obj > .gpu4/armadillo.obj.xz && echo /.gpu4/ >> .git/info/exclude
 # and carried with .gpu2 (carry: [".gpu2", ".gpu4"]). BEFORE=path compares with another version
 # (the second session measured against .gpu4/before583, made alike from commit 583b665; the third
-# against .gpu4/before5623, from 5623dfb; the fourth against .gpu4/before06c, from 06c4321).
+# against .gpu4/before5623, from 5623dfb; the fourth against .gpu4/before06c, from 06c4321; the ninth
+# steps against .gpu4/beforef64, from f64df1c).
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh time      100,000 spheres in the armadillo,
 #       before and now, Warp (cuda:0), numba-cuda and numba on the host's cores (bench/round_time.py)
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh profile   the per-round profile, before and now
@@ -17,6 +18,8 @@
 #       move_ids alone (bench/step_cost.py) and whole packings with and without (bench/profile_kernels.py)
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh deallocs  numba-cuda with its frees flushed after 10
 #       (numba's default) and after 1,000 pending ones (bench/round_time.py)
+#   source .gpu2/setup.sh && bash bench/gpu_issue20.sh profile_fast  a cProfile of one packing per GPU backend
+#       (bench/profile_fast.py): synchronisations, launches and host functions
 #   source .gpu2/setup.sh && bash bench/gpu_issue20.sh tests     the GPU backends' tests
 set -uo pipefail
 source bench/gpu_header.sh
@@ -56,8 +59,11 @@ case "${1:-time}" in
         --count 100000 --backends numba-cuda --versions now=. --repeats 3 --out "$OUT/round_time_deallocs_$count.json" \
         2>&1 | grep -v "^Warp\|^Module" | tee "$OUT/round_time_deallocs_$count.txt"
     done ;;
+  profile_fast)  # the eighth and ninth steps: where the host's time goes, a cProfile of one packing
+    timeout 280 python3 bench/profile_fast.py --backends warp numba-cuda --mesh /tmp/armadillo.obj --count 100000 \
+      --sort tottime cumulative --top 45 2>&1 | grep -v "^Warp\|^Module" | tee "$OUT/profile_fast.txt" ;;
   tests)
     timeout 570 python3 -m pytest -q -p no:cacheprovider tests/test_backends.py tests/test_scale.py tests/test_driver.py \
       -k "numba-cuda or warp or cuda or fast" 2>&1 | tail -15 | tee "$OUT/tests.txt" ;;
-  *) echo "unknown part $1: time, profile, million, spread or tests" >&2; exit 2 ;;
+  *) echo "unknown part $1: time, profile, million, spread, deallocs, profile_fast or tests" >&2; exit 2 ;;
 esac

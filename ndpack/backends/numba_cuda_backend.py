@@ -57,7 +57,8 @@ def touched_all(points, clearance, centers, radii, out):
 '''
 
 # The prototype store's kernels (see ndpack.backends.prototypes.DevicePrototypes): they work on
-# the device-resident prototypes by id, and compact their answers with an atomic counter.
+# the device-resident prototypes by id, and compact their answers with an atomic counter. Those over
+# every prototype take the store's ``count`` first: its arrays may hold more rows (room to grow).
 STORE_ENTRIES = '''
 def append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags):
     slot = cuda.atomic.add(counter, 0, 1)
@@ -69,16 +70,16 @@ def append(i, points, clearance, polished, counter, out_ids, out_values, out_poi
     return slot
 
 
-def max_all(clearance, below, out):
+def max_all(count, clearance, below, out):
     i = cuda.grid(1)
-    if i < clearance.shape[0] and clearance[i] < below:
+    if i < count and clearance[i] < below:
         cuda.atomic.max(out, 0, clearance[i])
 
 
-def select_all(clearance, polished, points, low, high, unpolished, top, relative, counter, out_ids, out_values,
-               out_points, out_flags):
+def select_all(count, clearance, polished, points, low, high, unpolished, top, relative, counter, out_ids,
+               out_values, out_points, out_flags):
     i = cuda.grid(1)
-    if i < clearance.shape[0]:
+    if i < count:
         c = clearance[i]
         lo = low
         if relative >= 0.0 and top[0] > 0.0:
@@ -87,11 +88,11 @@ def select_all(clearance, polished, points, low, high, unpolished, top, relative
             append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
 
 
-def touched_index_select(points, clearance, polished, centers, radii, origin, top, heads, nxt, level_of,
+def touched_index_select(count, points, clearance, polished, centers, radii, origin, top, heads, nxt, level_of,
                          level_head, level_next, level_count, level_rmax, nearest, counter, out_ids, out_values,
                          out_points, out_flags):
     i = cuda.grid(1)
-    if i < points.shape[0]:
+    if i < count:
         c = clearance[i]
         # Touched: a new sphere's gap from the point is below its clearance (the index of the
         # new spheres tightens the bound below it, and names the nearest new sphere, which goes
@@ -116,10 +117,10 @@ def lowered_clearance(i, c, ids, gaps, count):
     return c
 
 
-def split_mark(lower, upper, reach, points, clearance, bound, low, longest, touched_ids, touched_gap,
+def split_mark(count, lower, upper, reach, points, clearance, bound, low, longest, touched_ids, touched_gap,
                touched_count, counter, out_ids, out_values, out_points, out_flags):
     i = cuda.grid(1)
-    if i < clearance.shape[0]:
+    if i < count:
         side = upper[i, 0] - lower[i, 0]
         for k in range(1, D):
             side = max(side, upper[i, k] - lower[i, k])
@@ -420,11 +421,10 @@ class _CudaDevice:
         else:
             array.copy_to_device(np.full(array.shape, value, dtype=array.dtype), stream=self.stream)
 
-    def extend(self, array, host, kind):
-        longer = self.empty(len(array) + len(host), kind)
+    def grow(self, array, rows, kind):
+        longer = self.empty(rows, kind)
         if len(array):
             longer[: len(array)].copy_to_device(array, stream=self.stream)
-        self.write(longer, len(array), host, kind)
         return longer
 
     def write(self, array, start, host, kind):

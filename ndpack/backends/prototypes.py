@@ -330,8 +330,8 @@ class DevicePrototypes(Prototypes):
         rows of each array, after one synchronisation), ``launch(kernel_name, threads, *args)``,
         ``spheres(centers, radii)`` (device copies, never empty), ``params`` (the shape's
         parameters on the device), ``h`` (the finite-difference step), ``write(array, start,
-        host, kind)`` (rows from ``start`` replaced) and ``extend(array, host, kind)`` (a longer
-        device array: the rows of ``array``, then ``host``'s). Kinds are ``"float"``, ``"point"`` and
+        host, kind)`` (rows from ``start`` replaced) and ``grow(array, rows, kind)`` (a device
+        array of ``rows`` rows that begins with ``array``'s). Kinds are ``"float"``, ``"point"`` and
         ``"index"``. The kernels are ``max_all``, ``select_all``, ``touched_index_select``,
         ``gather_ids``, ``index_bound_ids``, ``index_fill_ids``, ``near_finish``, ``move_ids``,
         ``set_floats``, ``split_mark`` and ``split_apply`` of the backend's kernel text.
@@ -348,6 +348,11 @@ class DevicePrototypes(Prototypes):
     FIRST_WIDTH = 8
     #: Answer rows copied back with the counter, at least; more after larger answers.
     FIRST_PREFIX = 64
+    #: The arrays grow to at least this factor of their rows when cells split beyond them.
+    GROWTH = 1.25
+    #: The per-prototype arrays, and their kinds.
+    ARRAYS = (("d_lower", "point"), ("d_upper", "point"), ("d_points", "point"), ("d_reach", "float"),
+              ("d_wall", "float"), ("d_clearance", "float"), ("d_bound", "float"), ("d_polished", "index"))
 
     def __init__(self, device, cell_lower, cell_upper, reach, points, clearance, wall=None, spread=1):
         super().__init__(cell_lower, cell_upper, reach, points, clearance, wall)
@@ -360,7 +365,7 @@ class DevicePrototypes(Prototypes):
         self.d_lower, self.d_upper, self.d_reach = up(cell_lower, "point"), up(cell_upper, "point"), up(reach, "float")
         self.d_wall = up(no_wall(count) if wall is None else wall, "float")
         self.d_bound = up(reach, "float")  # the fast mode's split bound per cell (see split_candidates)
-        self.count = count
+        self.count = self.capacity = count  # the arrays' rows beyond count are room to grow
         # Answer buffers of the compacting kernels: at most one row per prototype.
         self.answers = (device.empty(count, "index"), device.empty(count, "float"),
                         device.empty(count, "point"), device.empty(count, "index"))
@@ -402,24 +407,30 @@ class DevicePrototypes(Prototypes):
         else:
             d_touched, d_gap, touched = device.upload(touched_ids, "index"), device.upload(touched_gap, "float"), len(touched_ids)
         ids, bound, _, _, _ = self._compact(
-            "split_mark", self.d_lower, self.d_upper, self.d_reach, self.d_points, self.d_clearance, self.d_bound,
+            "split_mark", self.count, self.d_lower, self.d_upper, self.d_reach, self.d_points, self.d_clearance, self.d_bound,
             float(low), float(longest), d_touched, d_gap, touched, fields=(0, 1))
         return ids.astype(np.int64), bound
 
     def split_cells(self, ids, cell_bounds, wall_slack):
         # On the device: the distance at the halves' centres in the kernel (cell_bounds is the host's way).
         device, count, first = self.device, len(ids), self.count
-        for name, kind in (("d_lower", "point"), ("d_upper", "point"), ("d_points", "point"), ("d_reach", "float"),
-                           ("d_wall", "float"), ("d_clearance", "float"), ("d_bound", "float"),
-                           ("d_polished", "index")):
-            rows = np.zeros((count, self.dim) if kind == "point" else count)
-            setattr(self, name, device.extend(getattr(self, name), rows, kind))
+        self._reserve(first + count)
         self.count += count
         device.launch("split_apply", count, device.upload(ids, "index"), self.d_lower, self.d_upper, self.d_reach,
                       self.d_wall, self.d_points, self.d_clearance, self.d_polished, self.d_bound, device.params, first,
                       float(wall_slack))
-        self.answers = tuple(device.empty(self.count, kind) for kind in ("index", "float", "point", "index"))
         return np.arange(first, self.count)
+
+    def _reserve(self, count):
+        """Room for ``count`` prototypes in every array: they grow by ``GROWTH`` at least, so that
+        few splits allocate (an allocation costs a synchronisation or a free in numba-cuda)."""
+        if count <= self.capacity:
+            return
+        capacity = max(count, int(self.GROWTH * self.capacity) + 1024)
+        for name, kind in self.ARRAYS:
+            setattr(self, name, self.device.grow(getattr(self, name), capacity, kind))
+        self.answers = tuple(self.device.empty(capacity, kind) for kind in ("index", "float", "point", "index"))
+        self.capacity = capacity
 
     def _compact(self, kernel, *args, fields=(0, 1, 2, 3), top=False):
         """Run a kernel that appends matches, with one synchronisation: ids (m,) ascending, their
@@ -456,9 +467,9 @@ class DevicePrototypes(Prototypes):
         ``points=False``: the points and polish flags stay on the device (None)."""
         if relative >= 0:
             self.device.fill(self.d_top, -np.inf)
-            self.device.launch("max_all", len(self), self.d_clearance, np.inf, self.d_top)
+            self.device.launch("max_all", len(self), self.count, self.d_clearance, np.inf, self.d_top)
         fields = (0, 1, 2, 3) if points else (0, 1)
-        return self._compact("select_all", self.d_clearance, self.d_polished, self.d_points, float(low),
+        return self._compact("select_all", self.count, self.d_clearance, self.d_polished, self.d_points, float(low),
                              float(high), int(unpolished), self.d_top, float(relative), fields=fields,
                              top=relative >= 0)
 
@@ -478,7 +489,7 @@ class DevicePrototypes(Prototypes):
 
     def top(self, below=np.inf):
         self.device.fill(self.d_top, -np.inf)
-        self.device.launch("max_all", len(self), self.d_clearance, float(below), self.d_top)
+        self.device.launch("max_all", len(self), self.count, self.d_clearance, float(below), self.d_top)
         return float(self.device.fetch((self.d_top, 1))[0][0])
 
     def leaders(self, k, window):
@@ -505,7 +516,7 @@ class DevicePrototypes(Prototypes):
             self.d_nearest = self.device.empty((len(self), 1), "index")
         # The kernel sends each one's nearest new sphere back in the polish flags' place.
         ids, _, points, nearest, _ = self._compact(
-            "touched_index_select", self.d_points, self.d_clearance, self.d_polished, up(new_centers, "point"),
+            "touched_index_select", self.count, self.d_points, self.d_clearance, self.d_polished, up(new_centers, "point"),
             up(new_radii, "float"), *index, self.d_nearest, fields=(0, 2, 3))
         return ids, points, nearest.astype(np.int64)
 

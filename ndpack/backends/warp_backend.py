@@ -242,11 +242,10 @@ class _WarpDevice:
     def fill(self, array, value):
         array.fill_(value)
 
-    def extend(self, array, host, kind):
-        longer = self.empty(len(array) + len(host), kind)
+    def grow(self, array, rows, kind):
+        longer = self.empty(rows, kind)
         if len(array):
             self.wp.copy(longer, array, count=len(array))
-        self.write(longer, len(array), host, kind)
         return longer
 
     def write(self, array, start, host, kind):

@@ -8,6 +8,9 @@ and ``sd(p, prm)``. Every kernel mirrors a step of the NumPy reference
 
 # ruff: noqa: F821  (F, D, VecD, sd, sd_feature, sd_at, sd_slope and wp exist where this text runs)
 
+# The kernels over every prototype take the store's ``count`` first: its arrays may hold more rows
+# (room to grow), and a launch of ``count`` threads reads only the first ``count``.
+
 
 @wp.func
 def nearest_obstacle(x: VecD, prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
@@ -223,14 +226,14 @@ def append(i: int, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F), p
 
 
 @wp.kernel
-def max_all(clearance: wp.array(dtype=F), below: F, out: wp.array(dtype=F)):
+def max_all(count: int, clearance: wp.array(dtype=F), below: F, out: wp.array(dtype=F)):
     c = clearance[wp.tid()]
     if c < below:
         wp.atomic_max(out, 0, c)
 
 
 @wp.kernel
-def select_all(clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32), points: wp.array(dtype=VecD),
+def select_all(count: int, clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32), points: wp.array(dtype=VecD),
                low: F, high: F, unpolished: int, top: wp.array(dtype=F), relative: F,
                counter: wp.array(dtype=wp.int32), out_ids: wp.array(dtype=wp.int32), out_values: wp.array(dtype=F),
                out_points: wp.array(dtype=VecD), out_flags: wp.array(dtype=wp.int32)):
@@ -401,7 +404,7 @@ def index_fill_ids(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), u
 
 
 @wp.kernel
-def touched_index_select(points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
+def touched_index_select(count: int, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
                          polished: wp.array(dtype=wp.int32), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
                          origin: wp.array(dtype=F), top: F, heads: wp.array(dtype=wp.int32),
                          nxt: wp.array(dtype=wp.int32), level_of: wp.array(dtype=wp.int32),
@@ -457,7 +460,7 @@ def lowered_clearance(i: int, c: F, ids: wp.array(dtype=wp.int32), gaps: wp.arra
 
 
 @wp.kernel
-def split_mark(lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD), reach: wp.array(dtype=F),
+def split_mark(count: int, lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD), reach: wp.array(dtype=F),
                points: wp.array(dtype=VecD), clearance: wp.array(dtype=F), bound: wp.array(dtype=F), low: F, longest: F, touched_ids: wp.array(dtype=wp.int32),
                touched_gap: wp.array(dtype=F), touched_count: int, counter: wp.array(dtype=wp.int32),
                out_ids: wp.array(dtype=wp.int32), out_values: wp.array(dtype=F), out_points: wp.array(dtype=VecD),
