@@ -6,7 +6,7 @@
 Every kernel launch of the device store is made synchronous and timed (so its time is the
 device's, launch included; copies queued before it are waited for first, and not counted).
 The driver's phases are timed inclusively
-(``refine`` contains ``_split``, which contains ``reconverge``). Synchronising every launch
+(``refine`` contains ``reconverge``). Synchronising every launch
 slows the run down: the total is not the unprofiled time. Compiles first (a 3-sphere packing).
 
 ``--variants`` compares, in one process, the code as it is (``now``) with a policy turned off:
@@ -47,7 +47,6 @@ PHASES = [
     (protosphere.RunState, "reconverge"),
     (protosphere.RunState, "polish"),
     (rounds.Fast, "refine"),
-    (rounds.Fast, "_split"),
     (protosphere.RunState, "_distance"),
     (protosphere.RunState, "insert"),
     (protosphere.RunState, "revive"),
@@ -92,7 +91,7 @@ def _timed_launch(recorder, launch):
         launch(self, name, threads, *args)
         self.synchronize()
         if name == "move_ids":  # the polish apart from moves
-            name = "move_ids[polish]" if args[-1] else "move_ids[move]"
+            name = "move_ids[polish]" if args[-2] else "move_ids[move]"  # args end with polish, spread
         recorder.kernel(name, time.perf_counter() - started, threads)
     return wrapper
 

@@ -4,7 +4,8 @@
         --versions before=/path/to/old/checkout now=. --repeats 2 --out rounds.json
 
 Each (version, backend) runs in its own process with that version's ``ndpack`` first on the path
-(two versions cannot share a process), compiles first (a 3-sphere packing, not timed), then packs
+(two versions cannot share a process), compiles first (a 2,000-sphere packing, not timed: enough
+rounds that cells split, so that numba-cuda compiles those kernels too), then packs
 ``--repeats`` times. Versions alternate per backend so that a drifting machine favours neither.
 Every packing is verified in float64; the table gives the median time, rounds, fill and the
 ratio of each version's median to the first version's.
@@ -26,7 +27,7 @@ import numpy as np
 import ndpack as nd
 mesh, count, backend, repeats = sys.argv[1], int(sys.argv[2]), sys.argv[3], int(sys.argv[4])
 shape = nd.TriangleMesh.load(mesh) if mesh != "cube" else nd.Box(np.zeros(3), np.ones(3))
-nd.pack(shape, 3, mode="fast", backend=backend)
+nd.pack(shape, 2000, mode="fast", backend=backend)
 for repeat in range(repeats):
     started = time.perf_counter()
     packing = nd.pack(shape, count, mode="fast", backend=backend)
