@@ -47,8 +47,8 @@ def _worker(connection, simulator: bool):
     import fuzz_shapes
 
     while (job := connection.recv()) is not None:
-        seed, index, backend, mode, budget = job
-        case = fuzz_shapes.case(seed, index)
+        seed, index, backend, mode, budget, extended = job
+        case = fuzz_shapes.case(seed, index, extended=extended)
         if simulator:
             case.n, case.grid, budget = min(case.n, SIMULATOR_N), SIMULATOR_GRID, SIMULATOR_BUDGET
         connection.send(fuzz_check.run_case(case, backend, mode, budget))
@@ -83,8 +83,9 @@ class Worker:
             self.process = None
 
 
-def jobs(trees, seed: int, runs: list[str], budget: float):
-    """(seed, index, backend, mode, budget) for each case, tree by tree (``trees``: the indices)."""
+def jobs(trees, seed: int, runs: list[str], budget: float, extended: bool = True):
+    """(seed, index, backend, mode, budget, extended) for each case, tree by tree (``trees``: the
+    indices; ``extended``: with plug-ins and open meshes, see tests/fuzz_shapes.py)."""
     plans = []
     for run in runs:
         backend, mode, share = run.split(":")
@@ -94,7 +95,7 @@ def jobs(trees, seed: int, runs: list[str], budget: float):
             # One draw per tree and backend, so that a backend's modes pack the same trees.
             draw = np.random.default_rng([seed, index, 1 + BACKENDS.index(backend)]).random()
             if draw < share:
-                yield seed, index, backend, mode, budget
+                yield seed, index, backend, mode, budget, extended
 
 
 def table(records: list[dict]) -> str:
@@ -121,16 +122,18 @@ def main(argv=None):
     parser.add_argument("--budget", type=float, default=20.0, help="nd.pack's time_budget per case (seconds)")
     parser.add_argument("--timeout", type=float, default=240.0, help="kill a case after this many seconds")
     parser.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "fuzz.json")
+    parser.add_argument("--no-extended", dest="extended", action="store_false",
+                        help="no plug-ins or open meshes: the trees as drawn before they were added")
     args = parser.parse_args(argv)
 
     import ndpack
 
-    todo = list(jobs(args.only or range(args.trees), args.seed, args.runs, args.budget))
+    todo = list(jobs(args.only or range(args.trees), args.seed, args.runs, args.budget, args.extended))
     workers = {False: Worker(False), True: Worker(True)}
     records, started = [], time.perf_counter()
     try:
         for job in tqdm(todo, unit="case", dynamic_ncols=True):
-            seed, index, backend, mode, _ = job
+            seed, index, backend, mode, _, _ = job
             record = workers[backend == "numba-cuda"].run(job, args.timeout)
             if record is None:
                 record = {"outcome": "timeout", "seconds": args.timeout, "killed": True}
@@ -148,6 +151,7 @@ def main(argv=None):
             "command": "python bench/fuzz.py " + " ".join(argv if argv is not None else sys.argv[1:]),
             "machine": machine_info(), "ndpack_path": ndpack.__file__, "versions": versions(),
             "trees": args.trees, "only": args.only, "seed": args.seed, "runs": args.runs, "budget": args.budget, "timeout": args.timeout,
+            "extended": args.extended,
             "wall_seconds": round(time.perf_counter() - started, 1), "summary": summary, "records": records,
         })
     print(summary)

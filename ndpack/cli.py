@@ -45,7 +45,8 @@ exit status: 0 valid, 1 a violation, 2 bad input.
 
 A file's recorded shape is used only where it is data (a mesh file or a built-in shape):
 a packing file may come from anyone, and one naming a script or module is never run unless
-you pass --shape or --trust-source.
+you pass --shape or --trust-source. A recorded mesh is reloaded with the --holes choice the
+file records (an open mesh packed with its holes capped is checked capped) unless you pass one.
 """
 
 RENDER_EXAMPLES = """examples:
@@ -116,6 +117,8 @@ def _option(text: str) -> tuple:
 
 #: The help of --holes, which pack, verify and render share.
 HOLES_HELP = "an open mesh file: cap closes each hole with a fan of triangles (the default, with a warning), refuse exits"
+HOLES_REUSE = "; default: what the packing records"
+HOLE_CHOICES = ("cap", "refuse")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -135,7 +138,7 @@ def _parser() -> argparse.ArgumentParser:
     pack.add_argument("shape", nargs="?", default="demo",
                       help="built-in spec, mesh file, .py script or module:function (default: demo)")
     pack.add_argument("--dim", type=int, help="dimension of a built-in shape (same as :dim=)")
-    pack.add_argument("--holes", choices=("cap", "refuse"), help=HOLES_HELP)
+    pack.add_argument("--holes", choices=HOLE_CHOICES, help=HOLES_HELP)
     pack.add_argument("-n", "--count", type=int, default=1000, help="number of spheres (default 1000)")
     pack.add_argument("-o", "--output", help="write the packing here; the suffix picks the format")
     pack.add_argument("--format", help="the output format where the suffix does not say (e.g. curobo, medial)")
@@ -163,7 +166,7 @@ def _parser() -> argparse.ArgumentParser:
     verify.add_argument("packing", help="a packing file (.npz, .csv, .json, ...)")
     verify.add_argument("--shape", help="the shape to check against (default: the one the file records)")
     verify.add_argument("--tol", type=_nonnegative, help="overlap and containment tolerance, >= 0 (default: ndpack's)")
-    verify.add_argument("--holes", choices=("cap", "refuse"), help=HOLES_HELP)
+    verify.add_argument("--holes", choices=HOLE_CHOICES, help=HOLES_HELP + HOLES_REUSE)
     verify.add_argument("--independent", action="store_true",
                         help="a mesh: also check 48 points on each sphere by the exact winding number, summed "
                         "over every triangle (slow: points x triangles)")
@@ -183,7 +186,7 @@ def _parser() -> argparse.ArgumentParser:
     render.add_argument("--at", type=_numbers, help="a point of the slice (default: the centres' mean)")
     render.add_argument("--clip", type=_numbers, help="px,py,pz,nx,ny,nz: drop spheres beyond this plane")
     render.add_argument("--shape", help="the shape whose outline a slice draws (default: the recorded one)")
-    render.add_argument("--holes", choices=("cap", "refuse"), help=HOLES_HELP)
+    render.add_argument("--holes", choices=HOLE_CHOICES, help=HOLES_HELP + HOLES_REUSE)
     render.add_argument("--trust-source", action="store_true",
                         help="run the script or module the file records as its shape (only for files you trust)")
 
@@ -314,8 +317,10 @@ def _recorded_shape(packing, override: str | None, required: bool, trust: bool =
 
     A recorded source that would run code (a script, a module, a package's plug-in) is used
     only with ``trust``: otherwise a crafted file could run anything on ``ndpack verify``.
-    Where the shape is not ``required`` such a source is skipped with a note on stderr."""
-    from .sources import code_in, load_shape
+    Where the shape is not ``required`` such a source is skipped with a note on stderr.
+    A recorded mesh file is loaded with the packing's recorded ``holes`` (what inside meant when
+    it was packed) unless ``holes`` is given."""
+    from .sources import code_in, is_mesh_file, load_shape
 
     if override:
         return load_shape(override, holes)
@@ -333,7 +338,18 @@ def _recorded_shape(packing, override: str | None, required: bool, trust: bool =
         print(f"ndpack: drawn without the outline: the packing records its shape as {code}; {advice}",
               file=sys.stderr)
         return None
+    if holes is None and is_mesh_file(str(source)):
+        holes = _recorded_holes(packing)
     return load_shape(str(source), holes)
+
+
+def _recorded_holes(packing) -> str | None:
+    """The packing's ``params["holes"]``, checked: a file may hold anything."""
+    holes = packing.params.get("holes")
+    if holes is not None and holes not in HOLE_CHOICES:
+        raise NdpackError(f"this packing records holes={holes!r}, which is none of {', '.join(HOLE_CHOICES)}: "
+                          "pass --holes cap or --holes refuse")
+    return holes
 
 
 def _verify(args) -> int:
@@ -411,6 +427,11 @@ def _info(args) -> int:
         print("            ratio max/min {:.3g}".format(radii.max() / radii.min()))
         _radius_histogram(radii)
     print("repaired:   " + (repair_summary(packing.repair) if packing.repair else "no (passed the final check as made)"))
+    holes = packing.params.get("holes")
+    if holes is not None:
+        meaning = {"cap": "an open mesh's holes closed by caps", "refuse": "open meshes refused"}
+        print(f"holes:      {holes} ({meaning.get(holes, 'not an option ndpack knows')}; verify and render "
+              "reload the mesh so)")
     if len(packing.stats.time):
         print(f"time:       {packing.stats.time[-1]:.2f} s")
     if packing.medial_axis is not None and len(packing.medial_axis):

@@ -39,13 +39,51 @@ def disjoint_greedy(centers, radii, margin):
     ``margin`` of one kept before it. ``centers`` (k, d), ``radii`` (k,) in priority order.
 
     Returns (j,) int64 positions, ascending.
+
+    The ``FEW_LARGE`` first are decided first, alone, and the rest that meet one of them kept are
+    dropped. Where that drops at least half the rest (many candidates in one gap: a coarse grid
+    in high dimension, where every cell's prototype finds the same largest gap), the greedy
+    subset is decided over the others only, which never lists the pairs among candidates that a
+    larger one already excludes (4,096 candidates of a 12-D ball on a grid of 2 made 8.4 million
+    pairs, 5.5 s); elsewhere the pairs of all are searched at once, as without it. Either way the
+    result is the same: a sphere a kept one excludes never excludes another.
     """
     from scipy.spatial import cKDTree
 
     count = len(radii)
     if count <= 1:
         return np.arange(count)
+    head = min(count, FEW_LARGE)
+    first, second = np.triu_indices(head, 1)
+    meet = _meet(centers, radii, first, second, margin)
+    leaders = greedy_over_pairs(head, first[meet], second[meet])
+    if head == count:
+        return leaders
     tree = cKDTree(centers)
+    found = tree.query_ball_point(centers[leaders], widened(radii[leaders] + radii[head:].max() + margin))
+    lengths = [len(near) for near in found]
+    first = np.repeat(leaders, lengths)
+    second = np.concatenate(found).astype(np.int64)
+    beyond = second >= head
+    first, second = first[beyond], second[beyond]
+    excluded = np.zeros(count, dtype=bool)
+    excluded[second[_meet(centers, radii, first, second, margin)]] = True
+    rest = np.flatnonzero(~excluded[head:]) + head
+    if len(rest) <= (count - head) / 2:
+        return np.concatenate([leaders, rest[disjoint_greedy(centers[rest], radii[rest], margin)]])
+    return _greedy_by_pairs(tree, centers, radii, margin)
+
+
+def _meet(centers, radii, first, second, margin):
+    """(p,) bool: whether spheres ``first[p]`` and ``second[p]`` come within ``margin`` (one
+    formula for every path of :func:`disjoint_greedy`, so that they decide alike to the bit)."""
+    gap = np.linalg.norm(centers[first] - centers[second], axis=1) - radii[first] - radii[second]
+    return (gap < margin) & (first != second)
+
+
+def _greedy_by_pairs(tree, centers, radii, margin):
+    """:func:`disjoint_greedy` over every pair that may meet, found in the k-d ``tree`` of ``centers``."""
+    count = len(radii)
     # Pairs that may meet: two of the rest within twice their largest radius, and each of the
     # few largest with any sphere within its radius and the largest.
     large, largest = few_largest(radii)
@@ -58,8 +96,7 @@ def disjoint_greedy(centers, radii, margin):
     if len(pairs) == 0:
         return np.arange(count)
     first, second = pairs.min(axis=1), pairs.max(axis=1)
-    gap = np.linalg.norm(centers[first] - centers[second], axis=1) - radii[first] - radii[second]
-    meet = (gap < margin) & (first != second)
+    meet = _meet(centers, radii, first, second, margin)
     return greedy_over_pairs(count, first[meet], second[meet])
 
 

@@ -60,7 +60,9 @@ class Packing:
     medial_radii : (m,) float64
         Their clearances (the radii of the maximal balls there).
     params : dict
-        The parameters of the run.
+        The parameters of the run; ``holes`` (``"cap"`` or ``"refuse"``) where the shape holds a
+        mesh whose holes were capped or refused (:attr:`~ndpack.TriangleMesh.hole_option`), and
+        ``source`` where ``ndpack pack`` made it.
     stop_reason : str
         Why the run stopped: ``count``, ``fill``, ``time``, ``min_radius``, ``no_room`` or
         ``interrupted``.

@@ -37,6 +37,7 @@ from .oracle import Oracle, ball_volume, check_compatible, check_packable
 from .packing import Packing, RoundStats
 from .rounds import FAST_WINDOW, POLISH_AHEAD, POLISH_WINDOW, SPLIT_RATIO, Fast, Faithful
 from .shapes.adapters import as_oracle
+from .shapes.mesh import recorded_holes
 from .shapes.plugin import check_plugin_slopes
 from .verify import verify
 
@@ -542,6 +543,9 @@ def pack(
         polish_iterations=POLISH_ITERATIONS, polish_window=POLISH_WINDOW, safety_margin=SAFETY_MARGIN,
         fast_window=FAST_WINDOW, split_ratio=SPLIT_RATIO,
     )
+    holes = recorded_holes(shape)
+    if holes is not None:  # what inside means at a mesh's holes: verify and render reload it so
+        params["holes"] = holes
     polish_ahead = POLISH_AHEAD if backend.launch_bound and mode == "fast" else None
     if mode == "fast":
         params.update(fast_eps_end=FAST_EPS_END, fast_polish_eps_end=FAST_POLISH_EPS_END, polish_ahead=polish_ahead)

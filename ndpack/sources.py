@@ -149,6 +149,12 @@ def _checked(shape, source: str):
     return shape
 
 
+def is_mesh_file(source: str) -> bool:
+    """Whether :func:`load_shape` reads ``source`` as a triangle mesh file (the one kind that
+    takes ``holes``)."""
+    return _kind(source.strip()) == "mesh"
+
+
 def code_in(source: str) -> str | None:
     """What code :func:`load_shape` would run for ``source``, in words, or None where it only
     reads data (a mesh file, a built-in shape spec): the same reading (:func:`_kind`), without

@@ -10,9 +10,9 @@ sign of the reference is used, so a sphere that pokes out between two sample dir
 missed; the anchors aim the samples where spheres touch the boundary.
 
 Outcomes (:data:`OUTCOMES`): ``valid``; ``clear error`` (an ``NdpackError``, while building the tree
-or packing it, on a shape the reference finds empty or for a reason other than emptiness);
-``refused non-empty`` (a ``ShapeError`` from ``nd.pack``, or no sphere at all, on a shape in which
-the reference finds inside points); ``repaired`` (ndpack's own final check had to shrink or drop
+or packing it, on a shape the reference finds empty or for a reason other than emptiness, such as
+a NumPy plug-in on a compiled backend); ``refused non-empty`` (a ``ShapeError`` while building the
+tree or from ``nd.pack``, or no sphere at all, on a shape in which the reference finds inside points); ``repaired`` (ndpack's own final check had to shrink or drop
 spheres: a bug it caught); ``invalid`` (the check here fails); ``crash`` (any other exception);
 ``timeout`` (the time budget ran out first).
 """
@@ -153,10 +153,11 @@ def run_case(case, backend: str, mode: str, time_budget: float | None = None) ->
     try:
         shape = case.build()
     except nd.NdpackError as error:
-        # A class given an empty part (nd.Union(a, empty)) refuses it by design, even where the
-        # whole is not empty: a clear error, with the reference's count kept to tell.
+        # The classes leave an empty part out as the operators do (nd.Union(a, empty) is a): a
+        # ShapeError while building a tree the reference finds inside points in is a refusal.
         found = inside_points(case.reference) if isinstance(error, nd.ShapeError) else None
-        record.update(outcome="clear error", where="build", inside_samples=found, **_error(error))
+        record.update(outcome="refused non-empty" if found else "clear error", where="build", inside_samples=found,
+                      **_error(error))
     except Exception as error:  # noqa: BLE001 - every other exception is what fuzzing looks for
         record.update(outcome="crash", where="build", traceback=traceback.format_exc(limit=-4), **_error(error))
     else:

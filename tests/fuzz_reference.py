@@ -3,7 +3,8 @@
 Each function returns a :class:`Reference` of one primitive or node, built from the numbers the
 generator drew (:mod:`fuzz_shapes`), never from an ndpack object: the exact membership of each
 primitive composed with and / or / not; meshes, manifold3d solids and cross-sections through
-libigl's winding number of their own meshes (a cross-section through its own extrusion);
+libigl's winding number of their own meshes (a cross-section through its own extrusion; an open
+mesh through the closed one it was cut from);
 polygons and shapely geometries through shapely. Where the reference knows the exact signed
 distance (balls, boxes, capsules, cylinders, tori and their rigid motions), offsets, shells and
 smooth unions are defined from it.
@@ -250,6 +251,18 @@ def winding_mesh(vertices, faces) -> Reference:
 
     return Reference(3, inside, np.array([vertices.min(axis=0), vertices.max(axis=0)]),
                      anchors=_nearest_vertices(vertices))
+
+
+def capped_mesh(vertices, faces, removed) -> Reference:
+    """An open mesh whose holes are the triangles ``removed`` (rows of ``faces``, sharing no
+    vertex), capped: inside by libigl's winding number of all of ``faces``, the removed ones
+    included (a cap in a triangle's plane covers it). The holes' centres are anchors, so that
+    the spheres next to a hole are sampled towards it."""
+    closed = winding_mesh(vertices, faces)
+    centres = np.asarray(vertices, dtype=np.float64)[np.asarray(faces)[removed]].mean(axis=1)
+    near = _nearest_vertices(np.vstack([np.asarray(vertices, dtype=np.float64), centres]))
+    closed.anchors = lambda x: np.concatenate([near(x), np.broadcast_to(centres, (len(x),) + centres.shape)], axis=1)
+    return closed
 
 
 def manifold_solid(solid) -> Reference:

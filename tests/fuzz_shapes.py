@@ -12,6 +12,12 @@ cuts by half-spaces and slabs, difference, complement (as ``a & ~b``), smooth un
 shell, translate, rotate (reflections too) and uniform scaling, through both the operators and
 the classes; other libraries' objects are moved and combined by their own library where ndpack
 cannot take them (a manifold3d solid has no ``.rotate`` of ndpack's).
+
+Extra leaves (``extended=True``, the default of :func:`case`): user plug-ins in every dimension
+(:class:`ndpack.ScalarFunction` of :mod:`fuzz_plugins`, or :class:`ndpack.Function` of a NumPy
+lambda; exact balls and boxes) and, in 3-D, open meshes (a trimesh primitive less a few triangles
+that share no vertex, loaded with ``holes="cap"``). They replace a leaf drawn as before, from a
+second random stream, so that every tree without one is the tree drawn before they existed.
 """
 
 from __future__ import annotations
@@ -37,6 +43,9 @@ NODE_WEIGHTS = {
 }
 #: Leaves whose exact signed distance the reference knows (for offset, shell, smooth union).
 EXACT_LEAVES = ("ball", "box", "rounded_box", "capsule", "cylinder", "torus")
+#: Extra leaves: the share of leaves replaced by one, and each one's weight (open meshes in 3-D).
+EXTRA_SHARE = 0.15
+EXTRA_WEIGHTS = {"plugin": 1, "open_mesh": 2}
 #: Grid cells along the longest side, by dimension (None: ndpack's default of about 32,768 cells).
 GRIDS = {2: (24, 48, None), 3: (10, 16, None), 4: (6, 9), 5: (4, 6), 6: (3, 4)}
 
@@ -91,15 +100,18 @@ class Case:
 
 
 def build(code: str):
-    """Evaluate a tree's source text, with ``nd``, ``np``, ``trimesh``, ``m3d`` and ``shapely``."""
+    """Evaluate a tree's source text, with ``nd``, ``np``, ``trimesh``, ``m3d``, ``shapely`` and
+    ``plugins`` (:mod:`fuzz_plugins`)."""
     import manifold3d as m3d
     import shapely
     import shapely.affinity  # noqa: F401  (moves shapely geometries)
     import trimesh
 
+    import fuzz_plugins
     import ndpack as nd
 
-    return eval(code, {"nd": nd, "np": np, "trimesh": trimesh, "m3d": m3d, "shapely": shapely})
+    return eval(code, {"nd": nd, "np": np, "trimesh": trimesh, "m3d": m3d, "shapely": shapely,
+                       "plugins": fuzz_plugins})
 
 
 def text(values) -> str:
@@ -135,8 +147,8 @@ def orthogonal(rng, dim: int, reflect: bool = False) -> np.ndarray:
 class Drawer:
     """Draws the parts of one tree in one dimension from a numpy Generator."""
 
-    def __init__(self, rng: np.random.Generator, dim: int):
-        self.rng, self.dim = rng, dim
+    def __init__(self, rng: np.random.Generator, dim: int, extra: np.random.Generator | None = None):
+        self.rng, self.dim, self.extra = rng, dim, extra
 
     def choose(self, weights: dict) -> str:
         names = list(weights)
@@ -164,6 +176,13 @@ class Drawer:
         weights = {k: LEAF_WEIGHTS[k] for k in names if ONLY_IN.get(k, self.dim) == self.dim}
         kind = self.choose(weights)
         part = getattr(self, "leaf_" + kind)()
+        if self.extra is not None and self.extra.random() < EXTRA_SHARE:
+            # Drawn above all the same, so that the rest of the tree is as without extra leaves.
+            extras = {k: w for k, w in EXTRA_WEIGHTS.items() if k == "plugin" or (self.dim == 3 and not exact)}
+            names = list(extras)
+            kind = names[self.extra.choice(len(names), p=np.array([extras[k] for k in names]) / sum(extras.values()))]
+            part = getattr(self, "extra_" + kind)(self.extra)
+            kind = next(iter(part.kinds))
         return Part(part.code, part.reference, frozenset({kind}), part.foreign)
 
     def exact(self, depth: int) -> Part:
@@ -259,8 +278,16 @@ class Drawer:
 
     # ------------------------------------------------------------------ other libraries
     def leaf_trimesh(self):
-        rng = self.rng
-        kind = self.choose({"box": 1, "icosphere": 1, "cylinder": 1, "capsule": 1, "cone": 1, "annulus": 1, "torus": 1})
+        code = self._trimesh_primitive(self.rng)
+        part = Part(code, foreign_reference("trimesh", code), foreign="trimesh")
+        if self.rng.random() < 0.5:  # as ndpack's own mesh shape, which takes ndpack's transforms
+            return Part(f"nd.TriangleMesh.from_trimesh({code})", part.reference)
+        return part
+
+    def _trimesh_primitive(self, rng):
+        """The source text of a closed trimesh primitive, turned and moved, drawn from ``rng``."""
+        names = ["box", "icosphere", "cylinder", "capsule", "cone", "annulus", "torus"]
+        kind = names[rng.choice(len(names), p=np.full(len(names), 1 / len(names)))]
         size = rng.uniform(0.4, 0.9)
         make = {
             "box": f"box(extents={text(rng.uniform(0.4, 1.4, 3))})",
@@ -275,12 +302,8 @@ class Drawer:
                      "major_sections=24, minor_sections=12)",
         }[kind]
         transform = np.eye(4)
-        transform[:3, :3], transform[:3, 3] = orthogonal(rng, 3), self.point(0.4)
-        code = f"trimesh.creation.{make}.apply_transform(np.array({text(transform)}))"
-        part = Part(code, foreign_reference("trimesh", code), foreign="trimesh")
-        if rng.random() < 0.5:  # as ndpack's own mesh shape, which takes ndpack's transforms
-            return Part(f"nd.TriangleMesh.from_trimesh({code})", part.reference)
-        return part
+        transform[:3, :3], transform[:3, 3] = orthogonal(rng, 3), rng.uniform(-0.4, 0.4, 3)
+        return f"trimesh.creation.{make}.apply_transform(np.array({text(transform)}))"
 
     def _manifold_piece(self):
         rng = self.rng
@@ -346,6 +369,52 @@ class Drawer:
         else:
             code = f"nd.Polygon.from_rings([{', '.join(text(r) for r in rings)}])"
         return Part(code, ref.even_odd(rings))
+
+    # ------------------------------------------------------------------ extra leaves
+    def extra_plugin(self, rng) -> Part:
+        """A user's plug-in: the exact distance of a ball or a box, as a ScalarFunction (every
+        backend) or a Function of a NumPy lambda (the NumPy backend), bounds a little loose or
+        tight, the exactness promised or not."""
+        d = self.dim
+        if rng.random() < 0.5:
+            c, r = rng.uniform(-0.5, 0.5, d), rng.uniform(0.3, 0.9)
+            lower, upper = c - r, c + r
+            params, reference, name = [*c, r], ref.ball(c, r), "ball"
+            numpy_form = f"lambda p: np.sqrt(((p - np.array({text(c)})) ** 2).sum(axis=1)) - {num(r)}"
+        else:
+            c = rng.uniform(-0.5, 0.5, d)
+            lower, upper = c - rng.uniform(0.2, 0.8, d), c + rng.uniform(0.2, 0.8, d)
+            params, reference, name = [*lower, *upper], ref.box(lower, upper), "box"
+            gap = f"np.maximum(np.array({text(lower)}) - p, p - np.array({text(upper)}))"
+            numpy_form = (f"lambda p: (lambda g: np.where(g.max(axis=1) > 0, np.sqrt((np.maximum(g, 0.0) ** 2)"
+                          f".sum(axis=1)), g.max(axis=1)))({gap})")
+        pad = rng.uniform(0.0, 0.2) if rng.random() < 0.5 else 0.0
+        bounds = text([lower - pad, upper + pad])
+        exact = "True" if rng.random() < 0.7 else "False"
+        flags = f"exact_inside={exact}, exact_outside={exact}"
+        if rng.random() < 0.6:
+            code = f"nd.ScalarFunction(plugins.{name}, {d}, {bounds}, params={text(params)}, {flags})"
+            return Part(code, reference, frozenset({"scalar_plugin"}))
+        return Part(f"nd.Function({numpy_form}, {d}, {bounds}, {flags})", reference, frozenset({"plugin"}))
+
+    def extra_open_mesh(self, rng) -> Part:
+        """A closed trimesh primitive less 1-3 triangles that share no vertex, loaded with
+        ``holes="cap"``: each hole's rim is the removed triangle, so its cap (a fan to a point of
+        its plane inside it) lies where the triangle was, and the reference is libigl's winding
+        number of the primitive's own triangles, the removed ones included."""
+        primitive = self._trimesh_primitive(rng)
+        mesh = build(primitive)
+        count, removed, used = rng.integers(1, 4), [], set()
+        for face in rng.permutation(len(mesh.faces)):
+            corners = set(mesh.faces[face].tolist())
+            if not corners & used:
+                removed.append(int(face))
+                used |= corners
+            if len(removed) == count:
+                break
+        code = (f"(lambda m: nd.TriangleMesh(m.vertices, np.delete(m.faces, {sorted(removed)}, axis=0), "
+                f"holes='cap'))({primitive})")
+        return Part(code, ref.capped_mesh(mesh.vertices, mesh.faces, sorted(removed)), frozenset({"open_mesh"}))
 
     # ------------------------------------------------------------------ nodes
     def _pair(self, a: Part, b: Part, operator: str, native: dict):
@@ -525,12 +594,13 @@ class Drawer:
         return Part(code, reference, part.kinds | {"far_away"})
 
 
-def case(seed: int, index: int, max_depth: int = 3) -> Case:
-    """Case ``index`` of the run ``seed``: a tree and its packing parameters, the same every time."""
+def case(seed: int, index: int, max_depth: int = 3, extended: bool = True) -> Case:
+    """Case ``index`` of the run ``seed``: a tree and its packing parameters, the same every time.
+    ``extended=False`` draws no extra leaf (plug-ins, open meshes): the trees as before them."""
     rng = np.random.default_rng([seed, index])
     dims = list(DIMENSIONS)
     dim = int(rng.choice(dims, p=[DIMENSIONS[d] for d in dims]))
-    drawer = Drawer(rng, dim)
+    drawer = Drawer(rng, dim, np.random.default_rng([seed, index, 1]) if extended else None)
     part = drawer.tree(int(rng.integers(1, max_depth + 1)))
     if rng.random() < 0.15:
         part = drawer.far_away(part)

@@ -56,6 +56,7 @@ def test_fast_mode_from_the_command_line(tmp_path):
 import os  # noqa: E402
 import signal  # noqa: E402
 import time  # noqa: E402
+import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -356,8 +357,29 @@ def test_an_open_mesh_file_is_capped_or_refused(tmp_path, capsys):
     assert error_line("pack", str(path), "--holes", "refuse").startswith("ndpack: error: the mesh is open: 1 hole")
     out = tmp_path / "open.npz"
     assert main(["pack", str(path), "--holes", "cap", "-n", "10", "--grid", "8", "-o", str(out), "-q"]) == 0
-    with pytest.warns(nd.MeshWarning, match="open .1 hole"):  # rebuilt from the file with the default: cap
-        assert main(["verify", str(out), "--independent"]) == 0
-    assert "independent check: 0 spheres with points outside" in capsys.readouterr().out
+    assert nd.Packing.load(out).params["holes"] == "cap"
+    capsys.readouterr()
+    # Saved and loaded again (another format): still the recorded choice.
+    again = nd.Packing.load(out).save(tmp_path / "again.json")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", nd.MeshWarning)  # the recorded holes="cap": no default, no warning
+        for saved in (out, again):
+            assert main(["verify", str(saved), "--independent"]) == 0
+            assert "independent check: 0 spheres with points outside" in capsys.readouterr().out
+        assert main(["render", str(again), "--kind", "slice", "-o", str(tmp_path / "slice.svg")]) == 0
+        assert main(["info", str(again)]) == 0
+        assert "holes:      cap (an open mesh's holes closed by caps" in capsys.readouterr().out
+    # The command line overrides it: --holes, or a --shape of its own.
     assert "the mesh is open: 1 hole" in error_line("verify", str(out), "--holes", "refuse")
     assert "--holes applies to a mesh file" in error_line("verify", str(out), "--shape", "box", "--holes", "cap")
+    with pytest.warns(nd.MeshWarning, match="open .1 hole"):  # --shape: the file's own default, cap
+        assert main(["verify", str(out), "--shape", str(path)]) == 0
+    # A file is data: a recorded choice ndpack does not know is refused in one line.
+    crafted = nd.Packing.load(out)
+    crafted.params["holes"] = "leak"
+    assert "records holes='leak', which is none of cap, refuse" in error_line(
+        "verify", str(crafted.save(tmp_path / "crafted.npz")))
+    # A mesh packed without --holes: capped by default, and recorded so.
+    with pytest.warns(nd.MeshWarning, match="open .1 hole"):
+        assert main(["pack", str(path), "-n", "5", "--grid", "8", "-o", str(tmp_path / "default.npz"), "-q"]) == 0
+    assert nd.Packing.load(tmp_path / "default.npz").params["holes"] == "cap"

@@ -178,10 +178,9 @@ def test_operators_chain_and_flatten():
 def test_bad_csg_is_refused():
     with pytest.raises(nd.DimensionError, match="different dimensions"):
         A & nd.Ball([0, 0, 0], 1)
-    with pytest.raises(nd.ShapeError, match="empty"):  # a node of parts that cannot meet
-        nd.Intersection(A, nd.Box([5, 5], [6, 6]))
-    with pytest.raises(nd.ShapeError, match="nothing to pack: the intersection .* do not overlap"):
-        nd.pack(A & nd.Box([5, 5], [6, 6]), 5)  # the operator's empty set, packed
+    for apart in (A & nd.Box([5, 5], [6, 6]), nd.Intersection(A, nd.Box([5, 5], [6, 6]))):
+        with pytest.raises(nd.ShapeError, match="nothing to pack: the intersection .* do not overlap"):
+            nd.pack(apart, 5)  # parts that cannot meet: an empty set, refused where it is packed
     with pytest.raises(nd.ShapeError, match="not orthogonal"):
         A.rotate([[2, 0], [0, 1]])
     with pytest.raises(nd.ShapeError, match="positive"):

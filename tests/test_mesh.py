@@ -324,6 +324,27 @@ def test_a_hole_is_capped_and_the_distance_respects_the_cap():
         nd.TriangleMesh.from_trimesh(side, holes="fill")
 
 
+def test_a_packing_records_what_inside_means_at_the_holes(tmp_path):
+    side = box_with_open_side()
+    with pytest.warns(MeshWarning, match="open"):
+        by_default = nd.TriangleMesh.from_trimesh(side)
+    capped = nd.TriangleMesh.from_trimesh(side, holes="cap")
+    closed = nd.TriangleMesh.from_trimesh(trimesh.creation.box())
+    refusing = nd.TriangleMesh.from_trimesh(trimesh.creation.box(), holes="refuse")
+    assert (by_default.hole_option, capped.hole_option, closed.hole_option, refusing.hole_option) == (
+        "cap", "cap", None, "refuse")
+    options = dict(n=4, grid=6, backend="numpy", progress=False)
+    packing = nd.pack(capped, **options)
+    assert packing.params["holes"] == "cap" and nd.pack(by_default, **options).params["holes"] == "cap"
+    assert "holes" not in nd.pack(closed, **options).params
+    assert nd.pack(refusing, **options).params["holes"] == "refuse"
+    # In a tree: capped wins over refused (capping leaves a closed mesh as it is).
+    assert nd.pack(capped - nd.Ball([0.5, 0, 0], 0.2), **options).params["holes"] == "cap"
+    assert nd.pack(refusing | nd.Ball([0.5, 0, 0], 0.2), **options).params["holes"] == "refuse"
+    for suffix in (".npz", ".json", ".csv"):
+        assert nd.Packing.load(packing.save(tmp_path / f"capped{suffix}")).params["holes"] == "cap"
+
+
 def test_rims_of_any_shape_are_closed():
     # Two holes that share a vertex (a rim that touches itself), and an edge of three triangles.
     sphere = trimesh.creation.icosphere(subdivisions=1)

@@ -90,12 +90,69 @@ def test_greedy_conflict_check_matches_brute_force(large):
     centers = rng.random((600, 3))
     # A fast-mode round may hold a few spheres far larger than the rest (gaps found late).
     radii = np.sort(np.concatenate([rng.random(600 - large) * 0.05, 0.1 + 0.2 * rng.random(large)]))[::-1]
-    kept = disjoint_greedy(centers, radii, 1e-9)
-    brute = []
+    np.testing.assert_array_equal(disjoint_greedy(centers, radii, 1e-9), sequential_greedy(centers, radii, 1e-9))
+
+
+def sequential_greedy(centers, radii, margin):
+    kept = []
     for i in range(len(radii)):
-        if all(np.linalg.norm(centers[i] - centers[j]) >= radii[i] + radii[j] + 1e-9 for j in brute):
-            brute.append(i)
-    np.testing.assert_array_equal(kept, brute)
+        if all(np.linalg.norm(centers[i] - centers[j]) >= radii[i] + radii[j] + margin for j in kept):
+            kept.append(i)
+    return kept
+
+
+def test_candidates_in_one_gap_are_decided_without_listing_their_pairs(monkeypatch):
+    """A 12-D ball on a grid of 2: every one of its 4,096 cells' prototypes finds the centre, and
+    the conflict check listed all 8.4 million pairs among them (5.5 s, 1.6 GB) for one sphere.
+    The work is bounded here by the pairs of spheres that meet it decides over, not by the time."""
+    import ndpack.conflicts as conflicts
+
+    compared = []
+    greedy = conflicts.greedy_over_pairs
+    monkeypatch.setattr(conflicts, "greedy_over_pairs", lambda count, first, second: compared.append(len(first)) or
+                        greedy(count, first, second))
+    rng = np.random.default_rng(0)
+    centers = 1e-3 * rng.standard_normal((4096, 12))
+    radii = np.sort(0.99 + 0.01 * rng.random(4096))[::-1]
+    assert disjoint_greedy(centers, radii, 1e-10).tolist() == [0]
+    assert sum(compared) < 4 * 4096
+    # Three gaps apart, candidates interleaved by size: the same subset as one after another.
+    gaps = 10 * np.eye(12)[rng.integers(0, 3, 600)]
+    centers, radii = gaps + 0.3 * rng.standard_normal((600, 12)), np.sort(0.5 + rng.random(600))[::-1]
+    compared.clear()
+    np.testing.assert_array_equal(disjoint_greedy(centers, radii, 1e-9), sequential_greedy(centers, radii, 1e-9))
+    assert sum(compared) < 600 * 64
+    # The fast mode's first sphere in that ball, through the driver.
+    compared.clear()
+    packing = nd.pack(nd.Ball(np.zeros(12), 1.0), n=3, grid=2, mode="fast", backend="numpy", progress=False)
+    assert len(packing) == 1 and packing.radii[0] > 0.999 and 0 < sum(compared) < 4 * 4096
+
+
+def test_the_reference_backend_bounds_its_temporaries(monkeypatch):
+    """In high dimensions every sphere is near every cell: the reference backend's (points,
+    neighbours, d) arrays go in chunks of CHUNK_FLOATS (a 12-D fast run of 2,000 spheres had
+    needed 24 GB), with the same results to the bit."""
+    import ndpack.backends.numpy_backend as numpy_backend
+
+    rng = np.random.default_rng(2)
+    dim, count = 12, 3000
+    shape = nd.Ball(np.zeros(dim), 1.0) - nd.Ball(np.zeros(dim), 0.5)
+    centers, radii = 0.7 * rng.standard_normal((400, dim)) / np.sqrt(dim), 0.05 + 0.05 * rng.random(400)
+    points = rng.uniform(-0.6, 0.6, (count, dim))
+    lower, upper = points - 0.2, points + 0.2
+    neighbours = np.tile(np.arange(400), (count, 1))
+    steps = np.linspace(0.2, 0.01, 8)
+    starts = rng.uniform(-0.6, 0.6, (3, count, dim))
+    whole = REFERENCE.converge(shape, points, lower, upper, centers, radii, neighbours, steps, starts=starts)
+    largest = []
+    among = NumpyBackend._free_space_among
+    monkeypatch.setattr(NumpyBackend, "_free_space_among", lambda self, shape, p, c, r: largest.append(c.size) or among(
+        self, shape, p, c, r))
+    monkeypatch.setattr(numpy_backend, "CHUNK_FLOATS", 200_000)
+    chunked = REFERENCE.converge(shape, points, lower, upper, centers, radii, neighbours, steps, starts=starts)
+    assert max(largest) <= 200_000
+    np.testing.assert_array_equal(chunked[0], whole[0])
+    np.testing.assert_array_equal(chunked[1], whole[1])
 
 
 def test_parallel_greedy_decides_as_one_item_after_another():

@@ -64,7 +64,12 @@ class NumpyBackend(Backend):
 
     def free_space(self, shape, points, centers, radii, neighbours):
         centers, radii = _with_sphere_at_infinity(centers, radii)
-        return self._free_space_among(shape, points, centers[neighbours], radii[neighbours])
+        # In chunks of points: the neighbours' centres are (n, w, d), and in high dimensions
+        # every sphere is near every cell (12-D, 1,614 spheres: 4.8 GB for one restart).
+        parts = list(_chunks(len(points), neighbours.shape[1] * points.shape[1])) or [slice(0, 0)]
+        found = [self._free_space_among(shape, points[part], centers[neighbours[part]], radii[neighbours[part]])
+                 for part in parts]
+        return np.concatenate([c for c, _ in found]), np.concatenate([g for _, g in found])
 
     def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None,
                  starts=None):
@@ -72,7 +77,15 @@ class NumpyBackend(Backend):
         # reference evaluates them all.
         points = self._best_of_starts(shape, points, starts, centers, radii, neighbours)
         centers, radii = _with_sphere_at_infinity(centers, radii)
-        neighbour_centers, neighbour_radii = centers[neighbours], radii[neighbours]
+        best_points, best = np.empty_like(points), np.empty(len(points))
+        for part in _chunks(len(points), neighbours.shape[1] * points.shape[1]):  # bounded memory, as above
+            best_points[part], best[part] = self._converge_among(
+                shape, points[part], cell_lower[part], cell_upper[part], centers[neighbours[part]],
+                radii[neighbours[part]], steps)
+        return best_points, best
+
+    def _converge_among(self, shape, points, cell_lower, cell_upper, neighbour_centers, neighbour_radii, steps):
+        """:meth:`converge` from ``points`` (n, d) among their neighbours (n, w, d), (n, w)."""
         points = points.copy()
         best_points = points.copy()
         best = np.full(len(points), -np.inf)

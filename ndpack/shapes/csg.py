@@ -37,8 +37,8 @@ INFINITE = np.inf
 
 def check_parts(node: str, *children: Oracle) -> int:
     """The children's common dimension; a clear error for a child that is an empty set or all
-    of space, which only the operators can combine (they leave it out, see
-    :mod:`ndpack.shapes.empty`)."""
+    of space, which no node holds (:class:`_Node` builds such a tree by the operators, which
+    leave it out; see :mod:`ndpack.shapes.empty`)."""
     dim = check_compatible(*children)
     for child in children:
         if is_special(child):
@@ -54,8 +54,43 @@ def common_box(shapes) -> np.ndarray | None:
     return None if np.any(box[0] >= box[1]) else box
 
 
-class _Boolean(Oracle):
+class _Built(type):
+    """The metaclass of :class:`_Node`: calling a node's class builds, where the node would hold
+    an empty part, what the operator builds (not through ``__new__``, after which Python would
+    run ``__init__`` again on an operator's result of the same class, with the empty part)."""
+
+    def __call__(cls, *args, **kwargs):
+        parts = [value for value in (*args, *kwargs.values()) if isinstance(value, Oracle)]
+        if _leaves_out(cls, parts):
+            return cls._by_operator(*args, **kwargs)
+        return super().__call__(*args, **kwargs)
+
+
+class _Node(Oracle, metaclass=_Built):
+    """A CSG node built by its class: where a part is an empty set or all of space (or the parts
+    of an intersection have boxes apart), the class builds what the operator does (``Union(a,
+    empty)`` is ``a | empty``, that is ``a``), so that an empty *part* of a tree is a valid empty
+    set whichever way the tree is written; only an empty *whole* shape is an error, where it is
+    packed. Subclasses give ``_by_operator`` (the operator form, with the class's parameters)
+    and ``_least_parts`` (fewer shapes than that: the class's own error)."""
+
+    _least_parts = 1
+
+
+def _leaves_out(cls, parts) -> bool:
+    """Whether a node of ``cls`` over ``parts`` is built by its operator instead (see :class:`_Node`).
+    Parts of different dimensions go to the class, which says so."""
+    if len(parts) < cls._least_parts or len({part.dim for part in parts}) != 1:
+        return False
+    if any(is_special(part) for part in parts):
+        return True
+    return issubclass(cls, Intersection) and common_box(parts) is None
+
+
+class _Boolean(_Node):
     """Shared code of n-ary min/max nodes: evaluate all children, keep the active one per point."""
+
+    _least_parts = 2
 
     _pick = staticmethod(np.argmin)
     _combine = "min"  # the same in the kernel language
@@ -111,10 +146,12 @@ class _Boolean(Oracle):
 
 
 class Union(_Boolean):
-    """Points inside any child: ``min`` of the distances."""
+    """Points inside any child: ``min`` of the distances. An empty child is left out, as ``|``
+    does: ``Union(a, empty)`` is ``a``."""
 
     _pick = staticmethod(np.argmin)
     _combine = "min"
+    _by_operator = staticmethod(lambda *children: children[0].union(*children[1:]))
 
     def __init__(self, *children: Oracle):
         super().__init__(*children)
@@ -126,10 +163,13 @@ class Union(_Boolean):
 
 
 class Intersection(_Boolean):
-    """Points inside every child: ``max`` of the distances."""
+    """Points inside every child: ``max`` of the distances. With an empty child, or children whose
+    bounding boxes do not overlap, it is an empty set, as ``&`` makes it: valid as a part of a
+    tree, refused where it is packed as a whole."""
 
     _pick = staticmethod(np.argmax)
     _combine = "max"
+    _by_operator = staticmethod(lambda *children: children[0].intersection(*children[1:]))
 
     def __init__(self, *children: Oracle):
         super().__init__(*children)
@@ -137,15 +177,17 @@ class Intersection(_Boolean):
         self.exact_outside = False
         self.convex = all(c.convex for c in self.children)
         self._bounds = common_box(self.children)
-        if self._bounds is None:
+        if self._bounds is None:  # only where __new__ was bypassed: it builds an Empty for boxes apart
             raise ShapeError(
                 f"the intersection of {', '.join(map(repr, self.children))} is empty: their "
                 "bounding boxes do not overlap"
             )
 
 
-class Complement(Oracle):
+class Complement(_Node):
     """Everything outside the child: the distance negated."""
+
+    _by_operator = staticmethod(lambda child: child.complement())
 
     def __init__(self, child: Oracle):
         self.dim = check_parts(type(self).__name__, child)
@@ -183,8 +225,12 @@ class Complement(Oracle):
         return f"~{self.child!r}"
 
 
-class Difference(Oracle):
-    """Points inside ``a`` and outside ``b``: ``max(a, -b)``."""
+class Difference(_Node):
+    """Points inside ``a`` and outside ``b``: ``max(a, -b)``. An empty ``b`` leaves ``a``, an empty
+    ``a`` is empty, as ``-`` does."""
+
+    _least_parts = 2
+    _by_operator = staticmethod(lambda a, b: a.difference(b))
 
     def __init__(self, a: Oracle, b: Oracle):
         self.dim = check_parts(type(self).__name__, a, b)
@@ -220,7 +266,7 @@ class Difference(Oracle):
         return f"({self.a!r} - {self.b!r})"
 
 
-class _Transformed(Oracle):
+class _Transformed(_Node):
     """A child seen through a map: subclasses define ``_to_child`` and ``_from_child_gradient``."""
 
     def __init__(self, child: Oracle):
@@ -254,6 +300,8 @@ class Translate(_Transformed):
     """The child moved by ``offset`` (dim,), kept as ``shift`` (an attribute named ``offset``
     would hide the :meth:`offset` method of every shape)."""
 
+    _by_operator = staticmethod(lambda child, offset: child.translate(offset))
+
     def __init__(self, child: Oracle, offset):
         super().__init__(child)
         self.shift = as_vector(offset, self.dim, "translation offset")
@@ -283,6 +331,8 @@ class Translate(_Transformed):
 
 class Rotate(_Transformed):
     """The child rotated (or reflected) by an orthogonal ``matrix`` (dim, dim) about ``center``."""
+
+    _by_operator = staticmethod(lambda child, matrix, center=None: child.rotate(matrix, center))
 
     def __init__(self, child: Oracle, matrix, center=None):
         super().__init__(child)
@@ -340,6 +390,8 @@ class Rotate(_Transformed):
 class Scale(_Transformed):
     """The child scaled uniformly by ``factor`` > 0 about ``center``: ``s * f((x - c) / s + c)``."""
 
+    _by_operator = staticmethod(lambda child, factor, center=None: child.scale_by(factor, center))
+
     def __init__(self, child: Oracle, factor: float, center=None):
         super().__init__(child)
         factor = float(factor)
@@ -378,8 +430,10 @@ class Scale(_Transformed):
         return f"{self.child!r}.scale_by({self.factor})"
 
 
-class Offset(Oracle):
+class Offset(_Node):
     """The child dilated by ``amount`` > 0 or eroded by ``-amount``: ``f - amount``."""
+
+    _by_operator = staticmethod(lambda child, amount: child.offset(amount))
 
     def __init__(self, child: Oracle, amount: float):
         self.dim = check_parts(type(self).__name__, child)
@@ -422,8 +476,10 @@ class Offset(Oracle):
         return f"{self.child!r}.offset({self.amount})"
 
 
-class Shell(Oracle):
+class Shell(_Node):
     """The layer of ``thickness`` centred on the child's boundary: ``|f| - thickness / 2``."""
+
+    _by_operator = staticmethod(lambda child, thickness: child.shell(thickness))
 
     def __init__(self, child: Oracle, thickness: float):
         self.dim = check_parts(type(self).__name__, child)
@@ -459,13 +515,16 @@ class Shell(Oracle):
         return f"{self.child!r}.shell({self.thickness})"
 
 
-class SmoothUnion(Oracle):
+class SmoothUnion(_Node):
     """Union of ``a`` and ``b`` with a fillet of width ``blend`` (polynomial smooth minimum).
 
     ``h = clip(1/2 + (b - a) / (2 k), 0, 1)``, ``f = h a + (1 - h) b - k h (1 - h)``. Its
     gradient is ``h grad a + (1 - h) grad b``, so it stays 1-Lipschitz: a lower bound of the
     distance to its own (filleted) boundary, never exact.
     """
+
+    _least_parts = 2
+    _by_operator = staticmethod(lambda a, b, blend: a.smooth_union(b, blend))
 
     def __init__(self, a: Oracle, b: Oracle, blend: float):
         self.dim = check_parts(type(self).__name__, a, b)

@@ -64,6 +64,10 @@ class TriangleMesh(Oracle):
         Whether the given mesh had every edge join exactly two consistently oriented triangles.
     holes : int
         Holes capped (0 for a closed mesh).
+    hole_option : {"cap", "refuse"} or None
+        What inside means at the holes, as a packing records it (``params["holes"]``, so that
+        ``ndpack verify`` and ``render`` reload the mesh the same way): the ``holes`` given, else
+        ``"cap"`` where holes were capped by default, else None (a closed mesh, no choice made).
     sign_method : str
         ``"pseudonormal"`` or ``"winding"``.
     notes : list of str
@@ -94,6 +98,7 @@ class TriangleMesh(Oracle):
         self.vertices, self.faces, self.closed = prepared.vertices, prepared.faces, prepared.closed
         self.given_faces = self.faces[:prepared.given_count]
         self.holes = prepared.holes
+        self.hole_option = holes if holes is not None else ("cap" if self.holes else None)
         self.notes = list(prepared.notes)
         self.name = name
         self._bounds = np.array([self.vertices.min(axis=0), self.vertices.max(axis=0)])
@@ -254,3 +259,13 @@ class TriangleMesh(Oracle):
         what = f"{self.name!r}, " if self.name else ""
         return f"TriangleMesh({what}{self.n_triangles} triangles)"
 
+
+def recorded_holes(shape) -> str | None:
+    """What a packing of ``shape`` records as ``params["holes"]``: ``"cap"`` where a mesh of its
+    tree had its holes capped or was loaded with ``holes="cap"``, else ``"refuse"`` where one was
+    loaded so, else None (no mesh, or no choice made). Capping leaves a closed mesh as it is, so
+    one answer holds for a tree of several meshes."""
+    from .plugin import tree
+
+    options = {getattr(node, "hole_option", None) for node in tree(shape) if isinstance(node, TriangleMesh)}
+    return "cap" if "cap" in options else "refuse" if "refuse" in options else None
