@@ -4,8 +4,9 @@
         --versions before=/path/to/old/checkout now=. --repeats 2 --out rounds.json
 
 Each (version, backend) runs in its own process with that version's ``ndpack`` first on the path
-(two versions cannot share a process), compiles first (a 2,000-sphere packing, not timed: enough
-rounds that cells split, so that numba-cuda compiles those kernels too), then packs
+(two versions cannot share a process), compiles first (a packing of a fifth of ``--count``, at least
+2,000 spheres, not timed: enough that cells split, so that numba-cuda, which compiles each kernel
+at its first launch, compiles those too), then packs
 ``--repeats`` times. Versions alternate per backend so that a drifting machine favours neither.
 Every packing is verified in float64; the table gives the median time, rounds, fill and the
 ratio of each version's median to the first version's.
@@ -27,7 +28,7 @@ import numpy as np
 import ndpack as nd
 mesh, count, backend, repeats = sys.argv[1], int(sys.argv[2]), sys.argv[3], int(sys.argv[4])
 shape = nd.TriangleMesh.load(mesh) if mesh != "cube" else nd.Box(np.zeros(3), np.ones(3))
-nd.pack(shape, 2000, mode="fast", backend=backend)
+nd.pack(shape, max(2000, count // 5), mode="fast", backend=backend)
 for repeat in range(repeats):
     started = time.perf_counter()
     packing = nd.pack(shape, count, mode="fast", backend=backend)
