@@ -402,13 +402,13 @@ class DevicePrototypes(Prototypes):
 
     def split_candidates(self, low, longest, touched_ids=None, touched_gap=None):
         device = self.device
-        if touched_ids is None or len(touched_ids) == 0:
-            d_touched, d_gap, touched = self.d_no_ids, self.d_no_gaps, 0
-        else:
-            d_touched, d_gap, touched = device.upload(touched_ids, "index"), device.upload(touched_gap, "float"), len(touched_ids)
+        touched = 0 if touched_ids is None else len(touched_ids)
+        d_touched, d_gap = self.d_no_ids, self.d_no_gaps
+        if touched:  # ascending ids: the kernel finds each prototype's by bisection
+            d_touched, d_gap = device.upload(touched_ids, "index"), device.upload(touched_gap, "float")
         ids, bound, _, _, _ = self._compact(
-            "split_mark", self.count, self.d_lower, self.d_upper, self.d_reach, self.d_points, self.d_clearance, self.d_bound,
-            float(low), float(longest), d_touched, d_gap, touched, fields=(0, 1))
+            "split_mark", self.count, self.d_lower, self.d_upper, self.d_reach, self.d_points, self.d_clearance,
+            self.d_bound, float(low), float(longest), d_touched, d_gap, touched, fields=(0, 1))
         return ids.astype(np.int64), bound
 
     def split_cells(self, ids, cell_bounds, wall_slack):
@@ -516,8 +516,8 @@ class DevicePrototypes(Prototypes):
             self.d_nearest = self.device.empty((len(self), 1), "index")
         # The kernel sends each one's nearest new sphere back in the polish flags' place.
         ids, _, points, nearest, _ = self._compact(
-            "touched_index_select", self.count, self.d_points, self.d_clearance, self.d_polished, up(new_centers, "point"),
-            up(new_radii, "float"), *index, self.d_nearest, fields=(0, 2, 3))
+            "touched_index_select", self.count, self.d_points, self.d_clearance, self.d_polished,
+            up(new_centers, "point"), up(new_radii, "float"), *index, self.d_nearest, fields=(0, 2, 3))
         return ids, points, nearest.astype(np.int64)
 
     def gather(self, ids):
@@ -580,7 +580,7 @@ class DevicePrototypes(Prototypes):
         if key not in self._steps:  # the driver's two schedules: copy each once
             self._steps[key] = (steps, device.upload(steps, "float"))
         spread = lane_spread(count, self.spread)
-        device.launch("move_ids", spread * count, d_ids, d_first, 0 if first is None else len(first), tries, np.uint64(stream),
-                      self.d_points, self.d_clearance,
-                      self.d_polished, self.d_lower, self.d_upper, self.d_wall, device.params, d_centers, d_radii,
-                      table, self._steps[key][1], device.h, int(polish), spread)
+        first_rows = 0 if first is None else len(first)
+        device.launch("move_ids", spread * count, d_ids, d_first, first_rows, tries, np.uint64(stream), self.d_points,
+                      self.d_clearance, self.d_polished, self.d_lower, self.d_upper, self.d_wall, device.params,
+                      d_centers, d_radii, table, self._steps[key][1], device.h, int(polish), spread)

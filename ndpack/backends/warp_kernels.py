@@ -461,10 +461,10 @@ def lowered_clearance(i: int, c: F, ids: wp.array(dtype=wp.int32), gaps: wp.arra
 
 @wp.kernel
 def split_mark(count: int, lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD), reach: wp.array(dtype=F),
-               points: wp.array(dtype=VecD), clearance: wp.array(dtype=F), bound: wp.array(dtype=F), low: F, longest: F, touched_ids: wp.array(dtype=wp.int32),
-               touched_gap: wp.array(dtype=F), touched_count: int, counter: wp.array(dtype=wp.int32),
-               out_ids: wp.array(dtype=wp.int32), out_values: wp.array(dtype=F), out_points: wp.array(dtype=VecD),
-               out_flags: wp.array(dtype=wp.int32)):
+               points: wp.array(dtype=VecD), clearance: wp.array(dtype=F), bound: wp.array(dtype=F), low: F,
+               longest: F, touched_ids: wp.array(dtype=wp.int32), touched_gap: wp.array(dtype=F), touched_count: int,
+               counter: wp.array(dtype=wp.int32), out_ids: wp.array(dtype=wp.int32), out_values: wp.array(dtype=F),
+               out_points: wp.array(dtype=VecD), out_flags: wp.array(dtype=wp.int32)):
     """Append the cells that may split, with their tightened bounds (the host store's
     ``split_candidates``); every cell looked at keeps its tighter bound."""
     i = wp.tid()
