@@ -61,14 +61,12 @@ def _snapshot(store):
     device, count = store.device, len(store)
     points, clearance, polished, reach = device.fetch((store.d_points, count), (store.d_clearance, count),
                                                       (store.d_polished, count), (store.d_reach, count))
-    host_reach = store.reach.copy()
 
     def restore():
         device.write(store.d_points, 0, points, "point")
         device.write(store.d_clearance, 0, clearance, "float")
         device.write(store.d_polished, 0, polished, "index")
         device.write(store.d_reach, 0, reach, "float")
-        store.reach[:] = host_reach
         device.synchronize()
     return restore
 

@@ -29,7 +29,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .backends import get_backend
-from .backends.prototypes import best_starts
+from .backends.prototypes import best_starts, cell_bounds
 from .backends.restarts import Restarts, run_key, stream
 from .consistency import ensure_possible
 from .errors import KEPT_IN_ERROR, GridWarning, InvalidPackingError, ParameterError, RepairWarning, ShapeError
@@ -210,7 +210,7 @@ class RunState:
         self.key, self.serial = key, 0
         # A float32 backend's clearances are good to about 1e-7 of the scale: it asks for more.
         self.margin = max(SAFETY_MARGIN, getattr(backend, "margin", SAFETY_MARGIN)) * shape.scale
-        self.wall_slack = WALL_SLACK * self.margin  # the walls' allowance for rounding (cell_bounds)
+        self.wall_slack = WALL_SLACK * self.margin  # the cells' walls' allowance for rounding (cell_bounds)
         self.count = 0
         self.centers = np.empty((64, self.dim))
         self.radii = np.empty(64)
@@ -229,7 +229,7 @@ class RunState:
             )
         index = np.stack(np.unravel_index(np.arange(total), tuple(counts)), axis=1)
         cell_lower = lower + index * cell_size
-        centres, reach, wall = self.cell_bounds(cell_lower, cell_lower + cell_size)
+        centres, reach, wall = cell_bounds(cell_lower, cell_lower + cell_size, self._distance, self.wall_slack)
         # A cell whose centre is farther out than half its diagonal (no positive clearance
         # bound) holds no interior point.
         keep = reach > 0
@@ -320,16 +320,6 @@ class RunState:
                                         key=lambda item: item[2]):
             points[row], clearance[row] = point, value  # ascending: the deepest of a cell is written last
         return points, clearance
-
-    def cell_bounds(self, lower, upper):
-        """For cells ``lower``, ``upper`` (k, d): their centres (k, d), an upper bound of any
-        clearance inside each (the reach, which finds the spheres near the cell) (k,), and a lower
-        bound of the boundary's distance at each centre, less a slack for rounding (the wall)
-        (k,); both from the centre's distance, which is 1-Lipschitz."""
-        centres = 0.5 * (lower + upper)
-        centre_distance = self._distance(centres)
-        half_diagonal = 0.5 * np.linalg.norm(upper - lower, axis=1)
-        return centres, -centre_distance + half_diagonal, -centre_distance - self.wall_slack
 
     def _distance(self, points):
         """The shape's signed distance at ``points`` (k, d): (k,) float64, on the backend where it

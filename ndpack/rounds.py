@@ -195,14 +195,14 @@ class Fast:
         level of cells split for them would cost more than they do.
         """
         store, top = state.prototypes, self.frontier
+        if touched is not None:  # not moved yet: the clearance at their points, with the new spheres
+            store.lower_clearance(touched.ids, touched.gap)
         total = 0
         for _ in range(4 * state.dim):
             if state.out_of_time():  # the run ends after this round: split no more
                 break
             low = (1 - self.window) * top
-            touched_ids, touched_gap = (None, None) if touched is None else (touched.ids, touched.gap)
-            ids, bound = store.split_candidates(low, max(self.ratio * top, 1e3 * state.margin), touched_ids,
-                                                touched_gap)
+            ids, bound = store.split_candidates(low, max(self.ratio * top, 1e3 * state.margin))
             allowed = max(0, MAX_PROTOTYPES - len(store))
             if most is not None:
                 allowed = min(allowed, most - total)
@@ -210,7 +210,7 @@ class Fast:
                 ids = np.sort(ids[np.argsort(-bound, kind="stable")[:allowed]])
             if len(ids) == 0:
                 break
-            new = store.split_cells(ids, state.cell_bounds, state.wall_slack)
+            new = store.split_cells(ids, state.wall_slack)
             if touched is not None:  # their first points first; the new ones start at their centres
                 state.reconverge(np.concatenate([touched.ids, new]), touched.pushed)
                 touched = None

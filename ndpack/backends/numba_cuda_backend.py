@@ -103,29 +103,15 @@ def touched_index_select(count, points, clearance, polished, centers, radii, ori
             out_flags[slot] = nearest[i, 0]
 
 
-def lowered_clearance(i, c, ids, gaps, count):
-    lo = 0
-    hi = count
-    while lo < hi:  # bisection: the first position whose id is not below i
-        middle = (lo + hi) // 2
-        if ids[middle] < i:
-            lo = middle + 1
-        else:
-            hi = middle
-    if lo < count and ids[lo] == i:
-        return min(c, gaps[lo])
-    return c
-
-
-def split_mark(count, lower, upper, reach, points, clearance, bound, low, longest, touched_ids, touched_gap,
-               touched_count, counter, out_ids, out_values, out_points, out_flags):
+def split_mark(count, lower, upper, reach, points, clearance, bound, low, longest, counter, out_ids, out_values,
+               out_points, out_flags):
     i = cuda.grid(1)
     if i < count:
         side = upper[i, 0] - lower[i, 0]
         for k in range(1, D):
             side = max(side, upper[i, k] - lower[i, k])
         if side > longest and bound[i] >= low:
-            c = lowered_clearance(i, clearance[i], touched_ids, touched_gap, touched_count)
+            c = clearance[i]
             far2 = 0.0
             for k in range(D):
                 far = max(points[i, k] - lower[i, k], upper[i, k] - points[i, k])
@@ -220,6 +206,12 @@ def set_floats(ids, values, out):
         out[ids[b]] = values[b]
 
 
+def lower_floats(ids, values, out):
+    b = cuda.grid(1)
+    if b < ids.shape[0]:
+        out[ids[b]] = min(out[ids[b]], values[b])
+
+
 def move_ids(ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper, wall, prm, centers,
              radii, nbr, steps, h, polish, spread):
     t = cuda.grid(1)
@@ -230,7 +222,8 @@ def move_ids(ids, first, first_rows, tries, stream, points, clearance, polished,
 '''
 ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
                "select_all", "max_all", "touched_index_select", "gather_ids", "index_bound_ids", "index_fill_ids",
-               "near_finish", "move_ids", "set_floats", "split_mark", "split_apply")
+               "near_finish", "move_ids", "set_floats", "lower_floats", "split_mark",
+               "split_apply")
 THREADS_PER_BLOCK = 128
 
 

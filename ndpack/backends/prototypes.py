@@ -72,6 +72,18 @@ def top_order(ids: np.ndarray, clearance: np.ndarray, k: int) -> np.ndarray:
     return np.lexsort((ids, -clearance))[:k]
 
 
+def cell_bounds(lower, upper, distance, wall_slack):
+    """For cells ``lower``, ``upper`` (k, d): their centres (k, d), an upper bound of any clearance
+    inside each (the reach, which finds the spheres near the cell) (k,), and a lower bound of the
+    boundary's distance at each centre less ``wall_slack`` for rounding (the wall) (k,); both from
+    the centre's signed distance, ``distance(centres) -> (k,)``, which is 1-Lipschitz. The device
+    kernel ``split_apply`` computes the same."""
+    centres = 0.5 * (lower + upper)
+    centre_distance = distance(centres)
+    half_diagonal = 0.5 * np.linalg.norm(upper - lower, axis=1)
+    return centres, -centre_distance + half_diagonal, -centre_distance - wall_slack
+
+
 class Prototypes:
     """All prototypes of one packing run, with their grid cells.
 
@@ -159,27 +171,30 @@ class Prototypes:
         """Every point (n, d) and clearance (n,) on the host: for results, not for rounds."""
         return self.gather(np.arange(len(self)))
 
-    def split_candidates(self, low, longest, touched_ids=None, touched_gap=None):
+    def lower_clearance(self, ids, values):
+        """Lower the clearances of prototypes ``ids`` (k,) to at most ``values`` (k,): what a new
+        sphere leaves of them at their points, before they move again."""
+        raise NotImplementedError
+
+    def split_candidates(self, low, longest):
         """The cells the fast mode may split: longer than ``longest`` on some side, and whose bound
         of the clearance anywhere inside reaches ``low``.
 
         The bound is kept per cell and only tightens (clearances only shrink as spheres arrive):
         ``min(reach, clearance + the way from the prototype to the cell's farthest corner)``, the
-        clearance being 1-Lipschitz, with the clearance of the prototypes ``touched_ids`` (m,)
-        ascending lowered to ``touched_gap`` (m,) (their gap to the new spheres, before they move).
+        clearance being 1-Lipschitz.
 
         Returns ids (k,) int64 ascending and their bounds (k,) float64.
         """
         raise NotImplementedError
 
-    def split_cells(self, ids, cell_bounds, wall_slack):
+    def split_cells(self, ids, wall_slack):
         """Cut cells ``ids`` (k,) ascending in two across their longest side (the first of equal
         sides), at the middle. The half that holds the prototype keeps it (still a local maximum
         there); the other half gets a new prototype at its centre, with clearance -inf, not
         converged: ids ``len(self)`` on, in the order of ``ids``. Each half's reach and wall come
-        from the distance at its centre (``cell_bounds(lower, upper) -> centres, reach, wall``
-        does it on the host; a device uses ``wall_slack``, the wall's allowance for rounding),
-        the reach no more than the cell's before.
+        from the shape's distance at its centre (:func:`cell_bounds`, the wall less
+        ``wall_slack``), the reach no more than the cell's before.
 
         Returns the new prototypes' ids (k,) int64.
         """
@@ -243,16 +258,15 @@ class HostPrototypes(Prototypes):
     def gather(self, ids):
         return self.points[ids], self.clearance[ids]
 
-    def split_candidates(self, low, longest, touched_ids=None, touched_gap=None):
+    def lower_clearance(self, ids, values):
+        self.clearance[ids] = np.minimum(self.clearance[ids], values)
+
+    def split_candidates(self, low, longest):
         if self.bound is None:
             self.longest = (self.cell_upper - self.cell_lower).max(axis=1)
             self.bound = self.reach.copy()
         ids = np.flatnonzero((self.longest > longest) & (self.bound >= low))
         points, clearance = self.gather(ids)
-        if touched_ids is not None:  # not moved yet: the clearance at their point, with the new spheres
-            hit = np.isin(ids, touched_ids)
-            rows = np.searchsorted(touched_ids, ids[hit])
-            clearance[hit] = np.minimum(clearance[hit], touched_gap[rows])
         lower, upper = self.cell_lower[ids], self.cell_upper[ids]
         farthest = np.maximum(points - lower, upper - points)
         bound = np.minimum(self.reach[ids], clearance + np.linalg.norm(farthest, axis=1))
@@ -260,7 +274,7 @@ class HostPrototypes(Prototypes):
         keep = bound >= low
         return ids[keep], bound[keep]
 
-    def split_cells(self, ids, cell_bounds, wall_slack):
+    def split_cells(self, ids, wall_slack):
         count, rows = len(ids), np.arange(len(ids))
         points, lower, upper = self.points[ids], self.cell_lower[ids], self.cell_upper[ids]
         axis = np.argmax(upper - lower, axis=1)
@@ -272,7 +286,8 @@ class HostPrototypes(Prototypes):
         other_lower[rows, axis] = np.where(low_half, middle, lower[rows, axis])
         other_upper[rows, axis] = np.where(low_half, upper[rows, axis], middle)
         new_lower, new_upper = np.concatenate([kept_lower, other_lower]), np.concatenate([kept_upper, other_upper])
-        centres, reach, wall = cell_bounds(new_lower, new_upper)
+        centres, reach, wall = cell_bounds(new_lower, new_upper, lambda at: self.backend.distance(self.shape, at),
+                                           wall_slack)
         reach = np.minimum(np.tile(self.reach[ids], 2), reach)
         self.cell_lower[ids], self.cell_upper[ids] = kept_lower, kept_upper
         self.reach[ids], self.wall[ids] = reach[:count], wall[:count]
@@ -334,7 +349,7 @@ class DevicePrototypes(Prototypes):
         array of ``rows`` rows that begins with ``array``'s). Kinds are ``"float"``, ``"point"`` and
         ``"index"``. The kernels are ``max_all``, ``select_all``, ``touched_index_select``,
         ``gather_ids``, ``index_bound_ids``, ``index_fill_ids``, ``near_finish``, ``move_ids``,
-        ``set_floats``, ``split_mark`` and ``split_apply`` of the backend's kernel text.
+        ``set_floats``, ``lower_floats``, ``split_mark`` and ``split_apply`` of the backend's kernel text.
     spread : int
         Most threads per prototype in a move launch (a power of two; see :func:`lane_spread`):
         ``SPREAD_MAX`` on a GPU, 1 on a CPU device, where idle threads would be work.
@@ -372,7 +387,6 @@ class DevicePrototypes(Prototypes):
         self.d_counter, self.d_top = device.empty(1, "index"), device.empty(1, "float")
         self.d_scratch = device.empty((1, 1), "index")  # the unused table of a bound-only index query
         self.d_no_first = device.empty(1, "point")  # the first points of a move that has none
-        self.d_no_ids, self.d_no_gaps = device.empty(1, "index"), device.empty(1, "float")
         self.d_nearest = None  # (n, 1): the touched query's nearest new sphere per prototype
         self.sphere_index = DeviceIndex(self.dim, device)
         self.width = self.FIRST_WIDTH
@@ -383,36 +397,29 @@ class DevicePrototypes(Prototypes):
     def __len__(self) -> int:
         return self.count
 
-    # The cells, copied from the device: for inspection and tests, not for rounds.
-    @property
-    def cell_lower(self):
-        return self.device.fetch((self.d_lower, self.count))[0]
+    def _host_copy(self, array):
+        """The first ``count`` rows of device ``array`` on the host: for inspection and tests,
+        not for rounds."""
+        return self.device.fetch((array, self.count))[0]
 
-    @property
-    def cell_upper(self):
-        return self.device.fetch((self.d_upper, self.count))[0]
+    cell_lower = property(lambda self: self._host_copy(self.d_lower))
+    cell_upper = property(lambda self: self._host_copy(self.d_upper))
+    reach = property(lambda self: self._host_copy(self.d_reach))
+    wall = property(lambda self: self._host_copy(self.d_wall))
 
-    @property
-    def reach(self):
-        return self.device.fetch((self.d_reach, self.count))[0]
+    def lower_clearance(self, ids, values):
+        if len(ids):
+            up = self.device.upload
+            self.device.launch("lower_floats", len(ids), up(ids, "index"), up(values, "float"), self.d_clearance)
 
-    @property
-    def wall(self):
-        return self.device.fetch((self.d_wall, self.count))[0]
-
-    def split_candidates(self, low, longest, touched_ids=None, touched_gap=None):
-        device = self.device
-        touched = 0 if touched_ids is None else len(touched_ids)
-        d_touched, d_gap = self.d_no_ids, self.d_no_gaps
-        if touched:  # ascending ids: the kernel finds each prototype's by bisection
-            d_touched, d_gap = device.upload(touched_ids, "index"), device.upload(touched_gap, "float")
+    def split_candidates(self, low, longest):
         ids, bound, _, _, _ = self._compact(
             "split_mark", self.count, self.d_lower, self.d_upper, self.d_reach, self.d_points, self.d_clearance,
-            self.d_bound, float(low), float(longest), d_touched, d_gap, touched, fields=(0, 1))
+            self.d_bound, float(low), float(longest), fields=(0, 1))
         return ids.astype(np.int64), bound
 
-    def split_cells(self, ids, cell_bounds, wall_slack):
-        # On the device: the distance at the halves' centres in the kernel (cell_bounds is the host's way).
+    def split_cells(self, ids, wall_slack):
+        # The halves' distances are evaluated by the kernel, on the device.
         device, count, first = self.device, len(ids), self.count
         self._reserve(first + count)
         self.count += count

@@ -5,10 +5,10 @@ A restart tries a prototype's cell at a few random points and starts from the be
 its current point). The points come from a hash of (run, restart, prototype id, try, axis), not
 from a generator's stream: a GPU draws them inside its move kernel, with nothing uploaded, and the
 host draws the same numbers for the same prototype, so that every backend still makes the same
-packing from the same seed. The hash is MurmurHash3's 32-bit finaliser. The kernels hold its 32-bit words in
-64-bit integers and mask every product, so that none overflows (NumPy scalars warn on overflow,
-and the CUDA simulator runs the kernels on NumPy scalars); the host hashes uint32 arrays, whose
-products wrap to the same bits. ``numba_kernels.py`` and ``warp_kernels.py`` implement the same
+packing from the same seed. The hash is MurmurHash3's 32-bit finaliser. The kernels hold its
+32-bit words in 64-bit integers and mask every product, so that none overflows (NumPy scalars
+warn on overflow, and the CUDA simulator runs the kernels on NumPy scalars); the host hashes
+uint32 arrays, whose products wrap to the same bits. ``numba_kernels.py`` and ``warp_kernels.py`` implement the same
 functions (``restart_key``, ``restart_unit``, ``restart_point``), tested equal to these.
 
 A *stream* (one 32-bit number) names one restart of many prototypes: :func:`stream` of the run's

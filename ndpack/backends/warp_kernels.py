@@ -442,28 +442,16 @@ def set_floats(ids: wp.array(dtype=wp.int32), values: wp.array(dtype=F), out: wp
     out[ids[b]] = values[b]
 
 
-@wp.func
-def lowered_clearance(i: int, c: F, ids: wp.array(dtype=wp.int32), gaps: wp.array(dtype=F), count: int):
-    """``c``, lowered to ``gaps[j]`` where ``ids[j] == i`` (``ids[:count]`` ascending)."""
-    lo = int(0)
-    hi = count
-    while lo < hi:  # bisection: the first position whose id is not below i
-        middle = (lo + hi) // 2
-        if ids[middle] < i:
-            lo = middle + 1
-        else:
-            hi = middle
-    if lo < count:
-        if ids[lo] == i:
-            return wp.min(c, gaps[lo])
-    return c
+@wp.kernel
+def lower_floats(ids: wp.array(dtype=wp.int32), values: wp.array(dtype=F), out: wp.array(dtype=F)):
+    b = wp.tid()
+    out[ids[b]] = wp.min(out[ids[b]], values[b])
 
 
 @wp.kernel
 def split_mark(count: int, lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD), reach: wp.array(dtype=F),
                points: wp.array(dtype=VecD), clearance: wp.array(dtype=F), bound: wp.array(dtype=F), low: F,
-               longest: F, touched_ids: wp.array(dtype=wp.int32), touched_gap: wp.array(dtype=F), touched_count: int,
-               counter: wp.array(dtype=wp.int32), out_ids: wp.array(dtype=wp.int32), out_values: wp.array(dtype=F),
+               longest: F, counter: wp.array(dtype=wp.int32), out_ids: wp.array(dtype=wp.int32), out_values: wp.array(dtype=F),
                out_points: wp.array(dtype=VecD), out_flags: wp.array(dtype=wp.int32)):
     """Append the cells that may split, with their tightened bounds (the host store's
     ``split_candidates``); every cell looked at keeps its tighter bound."""
@@ -474,7 +462,7 @@ def split_mark(count: int, lower: wp.array(dtype=VecD), upper: wp.array(dtype=Ve
     for k in range(1, D):
         side = wp.max(side, hi[k] - lo[k])
     if side > longest and bound[i] >= low:
-        c = lowered_clearance(i, clearance[i], touched_ids, touched_gap, touched_count)
+        c = clearance[i]
         p = points[i]
         farthest = VecD()
         for k in range(D):

@@ -177,7 +177,7 @@ class Intersection(_Boolean):
         self.exact_outside = False
         self.convex = all(c.convex for c in self.children)
         self._bounds = common_box(self.children)
-        if self._bounds is None:  # only where __new__ was bypassed: it builds an Empty for boxes apart
+        if self._bounds is None:  # only where the metaclass (_Built) was bypassed: it builds an empty set
             raise ShapeError(
                 f"the intersection of {', '.join(map(repr, self.children))} is empty: their "
                 "bounding boxes do not overlap"
