@@ -23,7 +23,7 @@ from __future__ import annotations
 import sys
 import time
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from tqdm.auto import tqdm
@@ -339,29 +339,35 @@ class RunState:
         """The inserted spheres: centres (m, d) and radii (m,)."""
         return self.centers[: self.count], self.radii[: self.count]
 
-    def reconverge(self, ids, first=None, tries=None, chunk=None):
+    def reconverge(self, ids, first=None, tries=None, chunk=None, ahead=None):
         """Restart the prototypes ``ids`` (k,) at their best start and let them converge again.
 
         The starts are the current point, ``first`` (k, d) if given (clipped to the cells), and
         ``tries`` random points of each cell (default ``restarts``). Long lists go in chunks
         (of ``chunk``, by default as many as ``START_FLOATS`` allows), bounding the memory of the
         starts a host store makes; the chunks draw the same points as one piece would.
+        ``ahead`` (a :class:`~ndpack.backends.prototypes.PolishAhead`) polishes in the same
+        launches those that reach ``ahead.low``, and ``ahead.ids`` with the first.
         """
         restarts = self._restarts(first, tries)
         chunk = chunk or max(1024, START_FLOATS // ((restarts.tries + 2) * self.dim))
+        if len(ids) == 0 and ahead is not None:
+            self.prototypes.move(ids, *self.spheres, self.steps, ahead=ahead)
         for start in range(0, len(ids), chunk):
             part = slice(start, start + chunk)
-            self._move_in_time(ids[part], restarts.part(part))
+            self._move_in_time(ids[part], restarts.part(part), ahead)
+            ahead = None if ahead is None else replace(ahead, ids=ahead.ids[:0])
 
     def out_of_time(self) -> bool:
         """Whether the time budget is spent; the driver stops after the round in progress."""
         return self.deadline is not None and time.perf_counter() >= self.deadline
 
-    def _move_in_time(self, ids, restarts):
-        """Move prototypes ``ids`` (k,) with ``restarts`` (a :class:`Restarts`). Under a deadline, in
-        pieces sized to a small share of the budget, none begun once it has passed (the run ends
-        after this round, so prototypes left unmoved are never chosen). Each prototype's move is
-        independent of the others', so the pieces change no result, only when it stops."""
+    def _move_in_time(self, ids, restarts, ahead=None):
+        """Move prototypes ``ids`` (k,) with ``restarts`` (a :class:`Restarts`), and ``ahead`` with
+        the first piece (see :meth:`reconverge`). Under a deadline, in pieces sized to a small
+        share of the budget, none begun once it has passed (the run ends after this round, so
+        prototypes left unmoved are never chosen). Each prototype's move is independent of the
+        others', so the pieces change no result, only when it stops."""
         done = 0
         while done < len(ids) and not self.out_of_time():
             if self.deadline is None:
@@ -370,9 +376,10 @@ class RunState:
                 size = FIRST_PIECE if self._seconds_each is None else PIECE_SHARE * self.budget / self._seconds_each
             piece = slice(done, done + max(1, int(size)))
             started = time.perf_counter()
-            self.prototypes.move(ids[piece], *self.spheres, self.steps, restarts=restarts.part(piece))
+            self.prototypes.move(ids[piece], *self.spheres, self.steps, restarts=restarts.part(piece), ahead=ahead)
             self._seconds_each = (time.perf_counter() - started) / len(ids[piece])
             done = piece.stop
+            ahead = None if ahead is None else replace(ahead, ids=ahead.ids[:0])
 
     def polish(self, ids):
         """Move prototypes ``ids`` further with the finer polish schedule, keeping each one's

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .backends.prototypes import top_order
+from .backends.prototypes import PolishAhead, top_order
 from .conflicts import disjoint_greedy
 
 #: Candidates within this fraction of the best clearance are polished (moved further, with a
@@ -172,21 +172,25 @@ class Fast:
         return points[chosen], radii[chosen]
 
     def after_round(self, state, centers, radii, room):
-        self.refine(state, SPLITS_PER_SPHERE * room, state.touched(centers, radii))
-        if self.polish_ahead is not None:  # after refine: its re-converged prototypes are included
-            ahead, _ = state.prototypes.select(low=self.polish_ahead * self.frontier, unpolished=True)
-            if len(ahead):
-                state.polish(ahead)
+        self.refine(state, SPLITS_PER_SPHERE * room, state.touched(centers, radii), self.polish_ahead)
 
-    def refine(self, state, most=None, touched=None):
+    def refine(self, state, most=None, touched=None, polish_ahead=None):
         """Split in two, across their longest side, the cells longer than ``ratio`` times the
-        round's frontier whose clearance bound reaches the candidates' window; the new halves'
-        prototypes converge. Repeats on the halves; returns how many split.
+        round's frontier whose clearance bound reaches the candidates' window; repeat on the
+        halves; then the new halves' prototypes converge, in one launch. Returns how many split.
+
+        A level's halves are split again on their reach, tightened by the spheres (the bound a
+        converged prototype adds, its clearance plus the way to the cell's farthest corner, is
+        over half the cell's longest side, so it cannot keep a cell this long from splitting),
+        so that no prototype moves between levels: on a GPU a move launch costs its longest
+        convergence however few prototypes move, and a level each had cost a launch, a
+        neighbour table and its synchronisations.
 
         The prototypes the round's spheres ``touched`` (a :class:`~ndpack.protosphere.Touched`)
-        restart with the first level's new prototypes, in the same launches (on a GPU a launch
-        costs its longest prototype's convergence, however few converge); a touched prototype
-        whose cell splits restarts in its half.
+        restart in the same launch; a touched prototype whose cell splits restarts in its half.
+        With ``polish_ahead`` (a fraction of the frontier, see ``POLISH_AHEAD``), every
+        unpolished prototype above it ends the round polished: in the same launch again, those
+        that converge above it continuing with the polish schedule.
 
         Work per round follows the cells that may split, not all cells. The bound stays valid as
         spheres arrive (clearances only shrink), so a cell is looked at again only once the
@@ -197,7 +201,7 @@ class Fast:
         store, top = state.prototypes, self.frontier
         if touched is not None:  # not moved yet: the clearance at their points, with the new spheres
             store.lower_clearance(touched.ids, touched.gap)
-        total = 0
+        total, made = 0, []
         for _ in range(4 * state.dim):
             if state.out_of_time():  # the run ends after this round: split no more
                 break
@@ -211,12 +215,15 @@ class Fast:
             if len(ids) == 0:
                 break
             new = store.split_cells(ids, state.wall_slack)
-            if touched is not None:  # their first points first; the new ones start at their centres
-                state.reconverge(np.concatenate([touched.ids, new]), touched.pushed)
-                touched = None
-            else:
-                state.reconverge(new)
+            store.tighten_reach(np.concatenate([ids, new]), *state.spheres)
+            made.append(new)
             total += len(ids)
-        if touched is not None:  # no cell split: the touched restart alone
-            state.reconverge(touched.ids, touched.pushed)
+        # The touched first (their first points are theirs), then the new ones from their centres.
+        moving = np.concatenate([touched.ids if touched is not None else np.empty(0, np.int64), *made])
+        ahead = None
+        if polish_ahead is not None:  # the new ones are not converged (-inf): none of them is selected
+            low = polish_ahead * top
+            waiting, _ = store.select(low=low, unpolished=True)
+            ahead = PolishAhead(state.polish_steps, low, np.setdiff1d(waiting, moving, assume_unique=True))
+        state.reconverge(moving, None if touched is None else touched.pushed, ahead=ahead)
         return total

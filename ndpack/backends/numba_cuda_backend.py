@@ -116,7 +116,9 @@ def split_mark(count, lower, upper, reach, points, clearance, bound, low, longes
             for k in range(D):
                 far = max(points[i, k] - lower[i, k], upper[i, k] - points[i, k])
                 far2 += far * far
-            b = min(reach[i], c + math.sqrt(far2))
+            b = reach[i]
+            if c > -math.inf:  # converged: the attained clearance bounds the cell too
+                b = min(b, c + math.sqrt(far2))
             bound[i] = min(bound[i], b)
             if b >= low:
                 slot = cuda.atomic.add(counter, 0, 1)
@@ -213,12 +215,12 @@ def lower_floats(ids, values, out):
 
 
 def move_ids(ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper, wall, prm, centers,
-             radii, nbr, steps, h, polish, spread):
+             radii, nbr, steps, h, polish, spread, polish_steps, polish_low, polish_from):
     t = cuda.grid(1)
     b = t // spread
     if t % spread == 0 and b < ids.shape[0]:
         move_one(b, ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper, wall, prm,
-                 centers, radii, nbr, steps, h, polish)
+                 centers, radii, nbr, steps, h, polish, polish_steps, polish_low, polish_from)
 '''
 ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
                "select_all", "max_all", "touched_index_select", "gather_ids", "index_bound_ids", "index_fill_ids",

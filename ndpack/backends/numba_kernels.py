@@ -211,17 +211,23 @@ def restart_unit(key, counter):
 
 
 def move_one(b, ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper, wall, prm, centers,
-             radii, nbr, steps, h, polish):
+             radii, nbr, steps, h, polish, polish_steps, polish_low, polish_from):
     """Move prototype ``ids[b]`` in place: from the best of its point, ``first[b]`` (clipped to
     its cell, where ``b < first_rows``) and ``tries`` random points of its cell drawn from
     ``stream``, converge; keep the result (``polish`` 0), or keep it only if better and mark it
-    polished (1)."""
+    polished (1). Then, where it was not a polish and the clearance reaches ``polish_low``,
+    polish it with ``polish_steps``; rows from ``polish_from`` on are only polished (the host
+    store's ``move(..., ahead=PolishAhead(...))``)."""
     i = ids[b]
     x = point()
     g = point()
     best = point()
     for k in range(D):
         x[k] = points[i, k]
+    if b >= polish_from:
+        polish_one(i, b, x, g, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
+                   polish_steps, h)
+        return
     lead = 1 if b < first_rows else 0
     if lead + tries > 0:
         top = nearest_obstacle(x, prm, centers, radii, nbr, b, wall_floor(x, lower, upper, wall, i), -1.0)[0]
@@ -243,6 +249,23 @@ def move_one(b, ids, first, first_rows, tries, stream, points, clearance, polish
         for k in range(D):
             points[i, k] = best[k]
     polished[i] = polish
+    if polish == 0 and c >= polish_low:
+        for k in range(D):
+            x[k] = best[k]
+        polish_one(i, b, x, g, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
+                   polish_steps, h)
+
+
+def polish_one(i, b, x, g, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr, steps, h):
+    """Polish prototype ``i`` (row ``b`` of the table) from ``x``, its point: move it with
+    ``steps`` and keep the result only if its clearance grew; mark it polished. ``g`` and
+    ``best`` are scratch."""
+    c = converge_from(x, g, best, i, b, lower, upper, wall, prm, centers, radii, nbr, steps, h)
+    if c > clearance[i]:
+        clearance[i] = c
+        for k in range(D):
+            points[i, k] = best[k]
+    polished[i] = 1
 
 
 def near_one(b, lower, upper, reach, centers, radii, out, width):

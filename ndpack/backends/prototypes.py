@@ -13,6 +13,8 @@ Ids are int64 prototype indices, ascending unless said otherwise.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .base import no_wall
@@ -28,6 +30,18 @@ FIRST_WINDOW, WIDEN = 0.05, 4.0
 #: prototype up to ``SPREAD_MAX`` threads, of which the first moves it and the rest idle, in at
 #: most ``SPREAD_THREADS`` threads (a power of two; see :func:`lane_spread`).
 SPREAD_MAX, SPREAD_THREADS = 32, 1 << 15
+
+
+@dataclass(frozen=True)
+class PolishAhead:
+    """A polish that rides on a move (:meth:`Prototypes.move`): the moved prototypes whose new
+    clearance reaches ``low`` continue with the polish schedule ``steps`` (T,), and the prototypes
+    ``ids`` (k,), none of them moved, are polished. On a GPU it is the same launch, which costs
+    its longest prototype's walk however few it moves."""
+
+    steps: np.ndarray
+    low: float
+    ids: np.ndarray
 
 
 def lane_spread(count: int, most: int = SPREAD_MAX, threads: int | None = None) -> int:
@@ -155,7 +169,7 @@ class Prototypes:
         """Points (k, d) and clearances (k,) of prototypes ``ids``, on the host."""
         raise NotImplementedError
 
-    def move(self, ids, centers, radii, steps, restarts=None, polish=False):
+    def move(self, ids, centers, radii, steps, restarts=None, polish=False, ahead=None):
         """Converge prototypes ``ids`` among the spheres ``centers`` (m, d), ``radii`` (m,).
 
         Each starts from the best (largest clearance) of its current point and the starts of
@@ -163,7 +177,8 @@ class Prototypes:
         the first ids), if given, and follows the cooling schedule ``steps`` (T,).
         ``polish=False``: the result replaces the prototype, which is marked unpolished (the
         spheres changed). ``polish=True``: it replaces it only where the clearance grew, and
-        marks it polished.
+        marks it polished. ``ahead`` (a :class:`PolishAhead`, with ``polish=False``): then the
+        moved prototypes whose clearance reaches ``ahead.low``, and ``ahead.ids``, are polished.
         """
         raise NotImplementedError
 
@@ -176,13 +191,21 @@ class Prototypes:
         sphere leaves of them at their points, before they move again."""
         raise NotImplementedError
 
+    def tighten_reach(self, ids, centers, radii):
+        """Tighten the reach of cells ``ids`` (k,) by the spheres ``centers`` (m, d), ``radii``
+        (m,) (see :meth:`~ndpack.backends.base.Backend.near_spheres`), as a move would, without
+        moving their prototypes: the fast mode splits again a level of cells before any of them
+        converges."""
+        raise NotImplementedError
+
     def split_candidates(self, low, longest):
         """The cells the fast mode may split: longer than ``longest`` on some side, and whose bound
         of the clearance anywhere inside reaches ``low``.
 
         The bound is kept per cell and only tightens (clearances only shrink as spheres arrive):
         ``min(reach, clearance + the way from the prototype to the cell's farthest corner)``, the
-        clearance being 1-Lipschitz.
+        clearance being 1-Lipschitz; the reach alone for a prototype that has not converged yet
+        (clearance -inf: a half made by :meth:`split_cells`).
 
         Returns ids (k,) int64 ascending and their bounds (k,) float64.
         """
@@ -269,7 +292,9 @@ class HostPrototypes(Prototypes):
         points, clearance = self.gather(ids)
         lower, upper = self.cell_lower[ids], self.cell_upper[ids]
         farthest = np.maximum(points - lower, upper - points)
-        bound = np.minimum(self.reach[ids], clearance + np.linalg.norm(farthest, axis=1))
+        with np.errstate(invalid="ignore"):  # -inf clearance: not converged, the reach alone bounds it
+            attained = np.where(clearance == -np.inf, np.inf, clearance + np.linalg.norm(farthest, axis=1))
+        bound = np.minimum(self.reach[ids], attained)
         self.bound[ids] = np.minimum(self.bound[ids], bound)
         keep = bound >= low
         return ids[keep], bound[keep]
@@ -307,12 +332,26 @@ class HostPrototypes(Prototypes):
             self.bound[changed] = self.reach[changed]
         return new
 
+    def tighten_reach(self, ids, centers, radii):
+        if len(ids) and len(radii):
+            _, self.reach[ids] = self.backend.near_spheres(self.cell_lower[ids], self.cell_upper[ids], self.reach[ids],
+                                                           centers, radii, return_bound=True)
+
     def touched(self, new_centers, new_radii):
         nearest = self.backend.touched(self.points, self.clearance, new_centers, new_radii)
         ids = np.flatnonzero(nearest >= 0)
         return ids, self.points[ids], nearest[ids]
 
-    def move(self, ids, centers, radii, steps, restarts=None, polish=False):
+    def move(self, ids, centers, radii, steps, restarts=None, polish=False, ahead=None):
+        self._move(ids, centers, radii, steps, restarts, polish)
+        if ahead is not None:  # one after the other: on a CPU a launch costs only its work
+            reached = ids[self.clearance[ids] >= ahead.low]
+            more = np.sort(np.concatenate([reached, ahead.ids])).astype(np.int64)
+            self._move(more, centers, radii, ahead.steps, None, True)
+
+    def _move(self, ids, centers, radii, steps, restarts, polish):
+        if len(ids) == 0:
+            return
         backend, shape = self.backend, self.shape
         lower, upper = self.cell_lower[ids], self.cell_upper[ids]
         starts = None if restarts is None else restarts.points(ids, lower, upper, self.points[ids])
@@ -538,6 +577,25 @@ class DevicePrototypes(Prototypes):
         points, clearance = device.fetch((out_points, count), (out_clearance, count))
         return points, clearance
 
+    def _tightened(self, d_ids, count, centers, radii, spread):
+        """The spheres on the device, their index, and the tightened reach (k,) of the cells of
+        ``d_ids`` (on the device, not yet stored)."""
+        device = self.device
+        d_centers, d_radii = device.spheres(centers, radii)
+        index = self.sphere_index.sync(centers, radii)
+        bound = device.empty(count, "float")
+        device.launch("index_bound_ids", spread * count, d_ids, self.d_lower, self.d_upper, self.d_reach, d_centers,
+                      d_radii, *index, self.d_scratch, bound, spread)
+        return d_centers, d_radii, index, bound
+
+    def tighten_reach(self, ids, centers, radii):
+        count = len(ids)
+        if count == 0 or len(radii) == 0:
+            return
+        d_ids = self.device.upload(ids, "index")
+        bound = self._tightened(d_ids, count, centers, radii, lane_spread(count, self.spread))[3]
+        self.device.launch("set_floats", count, d_ids, bound, self.d_reach)
+
     def _neighbours(self, ids, d_ids, centers, radii):
         """The spheres on the device and the (k, width) table of those near the cells of ``ids``
         (k,), padded with m.
@@ -548,11 +606,7 @@ class DevicePrototypes(Prototypes):
         """
         device, count = self.device, len(ids)
         spread = lane_spread(count, self.spread)  # the index walks diverge as the moves do
-        d_centers, d_radii = device.spheres(centers, radii)
-        index = self.sphere_index.sync(centers, radii)
-        bound = device.empty(count, "float")
-        device.launch("index_bound_ids", spread * count, d_ids, self.d_lower, self.d_upper, self.d_reach, d_centers,
-                      d_radii, *index, self.d_scratch, bound, spread)
+        d_centers, d_radii, index, bound = self._tightened(d_ids, count, centers, radii, spread)
         found = device.empty(count, "index")
         while True:
             table = device.empty((count, self.width), "index")
@@ -571,7 +625,10 @@ class DevicePrototypes(Prototypes):
                 return d_centers, d_radii, table
             self.width = int(widest[0])
 
-    def move(self, ids, centers, radii, steps, restarts=None, polish=False):
+    def move(self, ids, centers, radii, steps, restarts=None, polish=False, ahead=None):
+        moved = len(ids)
+        if ahead is not None:  # the polished-only rows after the moved ones, in the same launch
+            ids = np.concatenate([ids, ahead.ids])
         count = len(ids)
         if count == 0:
             return
@@ -583,11 +640,17 @@ class DevicePrototypes(Prototypes):
         first = None if restarts is None else restarts.first
         tries, stream = (0, 0) if restarts is None else (restarts.tries, restarts.stream)
         d_first = self.d_no_first if first is None else device.upload(first, "point")
-        key = (id(steps), len(steps))
-        if key not in self._steps:  # the driver's two schedules: copy each once
-            self._steps[key] = (steps, device.upload(steps, "float"))
         spread = lane_spread(count, self.spread)
         first_rows = 0 if first is None else len(first)
+        polish_steps, polish_low = (steps, np.inf) if ahead is None else (ahead.steps, ahead.low)
         device.launch("move_ids", spread * count, d_ids, d_first, first_rows, tries, np.uint64(stream), self.d_points,
                       self.d_clearance, self.d_polished, self.d_lower, self.d_upper, self.d_wall, device.params,
-                      d_centers, d_radii, table, self._steps[key][1], device.h, int(polish), spread)
+                      d_centers, d_radii, table, self._schedule(steps), device.h, int(polish), spread,
+                      self._schedule(polish_steps), float(polish_low), moved)
+
+    def _schedule(self, steps):
+        """A cooling schedule (T,) on the device; the driver has two, each copied once."""
+        key = (id(steps), len(steps))
+        if key not in self._steps:
+            self._steps[key] = (steps, self.device.upload(steps, "float"))
+        return self._steps[key][1]

@@ -467,7 +467,9 @@ def split_mark(count: int, lower: wp.array(dtype=VecD), upper: wp.array(dtype=Ve
         farthest = VecD()
         for k in range(D):
             farthest[k] = wp.max(p[k] - lo[k], hi[k] - p[k])
-        b = wp.min(reach[i], c + wp.length(farthest))
+        b = reach[i]
+        if c > -F(wp.inf):  # converged: the attained clearance bounds the cell too
+            b = wp.min(b, c + wp.length(farthest))
         bound[i] = wp.min(bound[i], b)
         if b >= low:
             slot = wp.atomic_add(counter, 0, 1)
@@ -556,16 +558,33 @@ def restart_point(key: wp.uint64, t: int, lower: VecD, upper: VecD):
     return y
 
 
+@wp.func
+def polish_one(i: int, b: int, x: VecD, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
+               polished: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
+               wall: wp.array(dtype=F), prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
+               nbr: wp.array2d(dtype=wp.int32), steps: wp.array(dtype=F), h: F):
+    """Polish prototype ``i`` (row ``b`` of the table) from ``x``, its point: move it with ``steps``
+    and keep the result only if its clearance grew; mark it polished."""
+    best, best_clearance = converge_from(x, lower[i], upper[i], wall[i], prm, centers, radii, nbr, b, steps, h)
+    if best_clearance > clearance[i]:
+        points[i] = best
+        clearance[i] = best_clearance
+    polished[i] = 1
+
+
 @wp.kernel
 def move_ids(ids: wp.array(dtype=wp.int32), first: wp.array(dtype=VecD), first_rows: int, tries: int,
              stream: wp.uint64, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
              polished: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
              wall: wp.array(dtype=F), prm: wp.array(dtype=F), centers: wp.array(dtype=VecD),
              radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32), steps: wp.array(dtype=F), h: F, polish: int,
-             spread: int):
+             spread: int, polish_steps: wp.array(dtype=F), polish_low: F, polish_from: int):
     """Move prototype ``ids[b]`` in place: from the best of its point, ``first[b]`` (clipped to its
     cell, where ``b < first_rows``) and ``tries`` random points of its cell drawn from ``stream``,
     converge; keep the result (``polish`` 0), or keep it only if better and mark it polished (1).
+    Then, where it was not a polish and the clearance reaches ``polish_low``, polish it with
+    ``polish_steps``; rows from ``polish_from`` on are only polished (the host store's
+    ``move(..., ahead=PolishAhead(...))``).
     Thread ``b * spread`` moves it; the ``spread - 1`` threads after it idle (see
     :func:`ndpack.backends.prototypes.lane_spread`)."""
     t = wp.tid()
@@ -574,6 +593,9 @@ def move_ids(ids: wp.array(dtype=wp.int32), first: wp.array(dtype=VecD), first_r
     b = t // spread
     i = ids[b]
     x = points[i]
+    if b >= polish_from:
+        polish_one(i, b, x, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr, polish_steps, h)
+        return
     lead = int(0)
     if b < first_rows:
         lead = 1
@@ -599,3 +621,5 @@ def move_ids(ids: wp.array(dtype=wp.int32), first: wp.array(dtype=VecD), first_r
         points[i] = best
         clearance[i] = best_clearance
     polished[i] = polish
+    if polish == 0 and best_clearance >= polish_low:
+        polish_one(i, b, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr, polish_steps, h)
