@@ -91,7 +91,8 @@ def _timed_launch(recorder, launch):
         launch(self, name, threads, *args)
         self.synchronize()
         if name == "move_ids":  # the polish apart from moves
-            name = "move_ids[polish]" if args[-2] else "move_ids[move]"  # args end with polish, spread
+            # args end with polish, spread, polish_steps, polish_low (finite: polishes ahead), polish_from
+            name = "move_ids[polish]" if args[-5] else "move_ids[move+ahead]" if args[-2] < 1e300 else "move_ids[move]"
         recorder.kernel(name, time.perf_counter() - started, threads)
     return wrapper
 

@@ -49,11 +49,13 @@ SMALL_ROUND_FIRST, SMALL_ROUND_SHARE = 64, 1 / 16
 #: polished ones only (:meth:`Fast.choose`).
 POLISH_PASSES = 2
 #: Fast mode on a launch-bound backend (a GPU, :attr:`~ndpack.backends.base.Backend.launch_bound`):
-#: after a round, every unpolished prototype above this fraction of its frontier is polished in one
-#: launch, so that the next round's window (which starts near ``(1 - FAST_WINDOW)**2`` of it) is
-#: mostly polished already and its choice needs no polish launch of its own. It polishes about
-#: 2.4x as many prototypes (armadillo, 30,000 spheres; docs/benchmarks.md, fifth steps): lanes a
-#: latency-bound launch leaves idle on a GPU, but work on a CPU, where it stays off.
+#: after a round, every unpolished prototype above this fraction of its frontier is polished, in
+#: the launch that moves the touched and new prototypes (a
+#: :class:`~ndpack.backends.prototypes.PolishAhead`), so that the next round's window (which
+#: starts near ``(1 - FAST_WINDOW)**2`` of it) is mostly polished already and its choice needs no
+#: polish launch of its own. It polishes about 2.4x as many prototypes (armadillo, 30,000 spheres;
+#: docs/benchmarks.md, fifth steps): lanes a latency-bound launch leaves idle on a GPU, but work
+#: on a CPU, where it stays off.
 POLISH_AHEAD = (1 - FAST_WINDOW) ** 2
 #: Fast mode: at most this many candidates a round (bounds the host's conflict check).
 MAX_CANDIDATES = 1 << 16

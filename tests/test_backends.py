@@ -395,6 +395,43 @@ def test_fast_mode_polishing_ahead(name, monkeypatch):
         np.testing.assert_allclose(packing.radii, reference.radii, rtol=0, atol=1e-12)
 
 
+def test_fast_round_moves_its_prototypes_in_one_call(monkeypatch):
+    """After a fast round, the cells split level after level without converging in between, and
+    the touched prototypes, the new ones of every level and those polished ahead move in one call
+    of the store (one launch on a GPU); the packing stays valid."""
+    from ndpack import rounds
+    from ndpack.backends.prototypes import HostPrototypes
+
+    moves, levels = [], []
+    after_round, move, split_cells = rounds.Fast.after_round, HostPrototypes.move, HostPrototypes.split_cells
+
+    def counted_after_round(self, *args):
+        moves.append(0)
+        levels.append(0)
+        after_round(self, *args)
+        moves.append(None)  # the next round's choice may polish: not counted
+
+    def counted_move(self, *args, **options):
+        if moves and moves[-1] is not None:
+            moves[-1] += 1
+        move(self, *args, **options)
+
+    def counted_split_cells(self, *args):
+        levels[-1] += 1
+        return split_cells(self, *args)
+
+    monkeypatch.setattr(rounds.Fast, "after_round", counted_after_round)
+    monkeypatch.setattr(HostPrototypes, "move", counted_move)
+    monkeypatch.setattr(HostPrototypes, "split_cells", counted_split_cells)
+    backend = backends.get_backend("numba")
+    monkeypatch.setattr(backend, "launch_bound", True)  # polish ahead, as on a GPU
+    # A coarse grid, so that cells split several levels a round.
+    packing = nd.pack(nd.Box(np.zeros(3), np.ones(3)), 2000, grid=6, mode="fast", backend=backend, on_invalid="raise")
+    assert packing.params["polish_ahead"] is not None and len(packing) == 2000
+    moves = [count for count in moves if count is not None]
+    assert max(levels) >= 2 and max(moves) == 1, (levels, moves)
+
+
 @pytest.mark.skipif(SIMULATED or _working("numba-cuda"), reason="runs only where there is no GPU")
 def test_numba_cuda_under_simulator():
     """The numba-cuda kernels, run by Numba's CUDA simulator in a fresh process (the switch

@@ -32,6 +32,10 @@ def test_index_finds_the_spheres_the_reference_finds(dim):
         got, bound = backend.near_spheres(lower, upper, reach, centers[:count], radii[:count], return_bound=True)
         np.testing.assert_array_equal(got, expected)
         np.testing.assert_allclose(bound, expected_bound, rtol=0, atol=1e-12)
+        # The bound alone (a split level's halves) is the same walk's, to the bit.
+        tightened = backend.tightened_reach(lower, upper, reach, centers[:count], radii[:count])
+        np.testing.assert_array_equal(tightened, bound)
+        assert np.all(tightened <= reach) and (count < 2000 or np.any(tightened < reach))
         widths.append(got.shape[1])
     # The table is filled as wide as the last call's widest rows: the rows beyond that walk again.
     assert widths[0] < 8 < widths[2], widths

@@ -129,6 +129,11 @@ class Backend:
         """
         raise NotImplementedError
 
+    def tightened_reach(self, box_lower, box_upper, reach, centers, radii) -> np.ndarray:
+        """The reach (n,) float64 of each box tightened by the spheres, as :meth:`near_spheres`
+        returns it with ``return_bound``, without the table (backends may skip building it)."""
+        return self.near_spheres(box_lower, box_upper, reach, centers, radii, return_bound=True)[1]
+
     def touched(self, points, clearance, new_centers, new_radii) -> np.ndarray:
         """Which prototypes the new spheres (k, d), (k,) touch, and the nearest that does.
 

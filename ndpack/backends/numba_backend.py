@@ -139,6 +139,18 @@ class NumbaBackend(Backend):
                   _f64(centers), _f64(radii), _i64(neighbours), _f64(steps), h, out_points, out_clearance)
         return out_points, out_clearance
 
+    def tightened_reach(self, box_lower, box_upper, reach, centers, radii):
+        bound = _f64(reach).copy()
+        count = len(box_lower)
+        if len(centers) == 0 or count == 0:
+            return bound
+        centers, radii = _f64(centers), _f64(radii)
+        index = self._index(box_lower.shape[1]).sync(centers, radii)
+        # The first of near_spheres' walks alone: it tightens the bound and counts, filling nothing.
+        self._run(geometry_kernels(box_lower.shape[1])["index_query"], _f64(box_lower), _f64(box_upper), bound, 0,
+                  centers, radii, *index, np.empty(count, dtype=np.int64), np.empty((count, 0), dtype=np.int64))
+        return bound
+
     def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
         namespace = geometry_kernels(box_lower.shape[1])
         count = len(box_lower)

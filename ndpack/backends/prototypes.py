@@ -334,8 +334,8 @@ class HostPrototypes(Prototypes):
 
     def tighten_reach(self, ids, centers, radii):
         if len(ids) and len(radii):
-            _, self.reach[ids] = self.backend.near_spheres(self.cell_lower[ids], self.cell_upper[ids], self.reach[ids],
-                                                           centers, radii, return_bound=True)
+            self.reach[ids] = self.backend.tightened_reach(self.cell_lower[ids], self.cell_upper[ids], self.reach[ids],
+                                                           centers, radii)
 
     def touched(self, new_centers, new_radii):
         nearest = self.backend.touched(self.points, self.clearance, new_centers, new_radii)

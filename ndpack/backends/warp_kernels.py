@@ -622,4 +622,5 @@ def move_ids(ids: wp.array(dtype=wp.int32), first: wp.array(dtype=VecD), first_r
         clearance[i] = best_clearance
     polished[i] = polish
     if polish == 0 and best_clearance >= polish_low:
-        polish_one(i, b, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr, polish_steps, h)
+        polish_one(i, b, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr, polish_steps,
+                   h)
