@@ -23,7 +23,7 @@ from __future__ import annotations
 import sys
 import time
 import warnings
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from tqdm.auto import tqdm
@@ -356,7 +356,7 @@ class RunState:
         for start in range(0, len(ids), chunk):
             part = slice(start, start + chunk)
             self._move_in_time(ids[part], restarts.part(part), ahead)
-            ahead = None if ahead is None else replace(ahead, ids=ahead.ids[:0])
+            ahead = None if ahead is None else ahead.later()
 
     def out_of_time(self) -> bool:
         """Whether the time budget is spent; the driver stops after the round in progress."""
@@ -379,7 +379,7 @@ class RunState:
             self.prototypes.move(ids[piece], *self.spheres, self.steps, restarts=restarts.part(piece), ahead=ahead)
             self._seconds_each = (time.perf_counter() - started) / len(ids[piece])
             done = piece.stop
-            ahead = None if ahead is None else replace(ahead, ids=ahead.ids[:0])
+            ahead = None if ahead is None else ahead.later()
 
     def polish(self, ids):
         """Move prototypes ``ids`` further with the finer polish schedule, keeping each one's

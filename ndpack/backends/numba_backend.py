@@ -140,30 +140,32 @@ class NumbaBackend(Backend):
         return out_points, out_clearance
 
     def tightened_reach(self, box_lower, box_upper, reach, centers, radii):
+        return self._bound_walk(box_lower, box_upper, reach, centers, radii)[0]
+
+    def _bound_walk(self, box_lower, box_upper, reach, centers, radii):
+        """The sphere index's first walk: the tightened reach (n,), and the index (None with no
+        spheres or boxes); it counts, filling nothing."""
         bound = _f64(reach).copy()
         count = len(box_lower)
         if len(centers) == 0 or count == 0:
-            return bound
+            return bound, None
         centers, radii = _f64(centers), _f64(radii)
         index = self._index(box_lower.shape[1]).sync(centers, radii)
-        # The first of near_spheres' walks alone: it tightens the bound and counts, filling nothing.
         self._run(geometry_kernels(box_lower.shape[1])["index_query"], _f64(box_lower), _f64(box_upper), bound, 0,
                   centers, radii, *index, np.empty(count, dtype=np.int64), np.empty((count, 0), dtype=np.int64))
-        return bound
+        return bound, index
 
     def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
         namespace = geometry_kernels(box_lower.shape[1])
         count = len(box_lower)
-        if len(centers) == 0 or count == 0:
+        bound, index = self._bound_walk(box_lower, box_upper, reach, centers, radii)
+        if index is None:
             table = np.zeros((count, 0), dtype=np.int64)
-            return (table, _f64(reach).copy()) if return_bound else table
+            return (table, bound) if return_bound else table
         centers, radii = _f64(centers), _f64(radii)
-        index = self._index(box_lower.shape[1]).sync(centers, radii)
         lower, upper = _f64(box_lower), _f64(box_upper)
-        bound = _f64(reach).copy()
         counts = np.empty(count, dtype=np.int64)
         query = namespace["index_query"]
-        self._run(query, lower, upper, bound, 0, centers, radii, *index, counts, np.empty((count, 0), dtype=np.int64))
         # Count and fill in one walk, in a table as wide as the last calls' widest rows; only the
         # rows that overflow it walk again (a walk per pass is a third of this call's time).
         dim = box_lower.shape[1]

@@ -13,7 +13,7 @@ Ids are int64 prototype indices, ascending unless said otherwise.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -42,6 +42,10 @@ class PolishAhead:
     steps: np.ndarray
     low: float
     ids: np.ndarray
+
+    def later(self) -> PolishAhead:
+        """The same polish for the moves after the first, which polished ``ids`` already."""
+        return replace(self, ids=self.ids[:0])
 
 
 def lane_spread(count: int, most: int = SPREAD_MAX, threads: int | None = None) -> int:
@@ -292,8 +296,8 @@ class HostPrototypes(Prototypes):
         points, clearance = self.gather(ids)
         lower, upper = self.cell_lower[ids], self.cell_upper[ids]
         farthest = np.maximum(points - lower, upper - points)
-        with np.errstate(invalid="ignore"):  # -inf clearance: not converged, the reach alone bounds it
-            attained = np.where(clearance == -np.inf, np.inf, clearance + np.linalg.norm(farthest, axis=1))
+        # -inf clearance: not converged, the reach alone bounds it.
+        attained = np.where(clearance == -np.inf, np.inf, clearance + np.linalg.norm(farthest, axis=1))
         bound = np.minimum(self.reach[ids], attained)
         self.bound[ids] = np.minimum(self.bound[ids], bound)
         keep = bound >= low
