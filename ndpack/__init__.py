@@ -27,8 +27,9 @@ from .errors import (
 )
 from .oracle import Oracle, Volume, ball_volume
 from .packing import Packing, RoundStats
-from .protosphere import Round, pack
+from .protosphere import Round, pack, pack_sizes
 from .rotation import rotation
+from .sizes import SizeDistribution, SizeReport
 from .shapes import *  # noqa: F401,F403  (the shape classes, listed in shapes.__all__)
 from .shapes import __all__ as _shape_names
 from .verify import Verification, verify
@@ -38,5 +39,5 @@ __version__ = "0.1.0"
 __all__ = [
     "BackendError", "BoundsError", "KernelError", "DimensionError", "GridWarning", "InvalidPackingError", "MeshWarning", "NdpackError", "OracleError", "Oracle",
     "Packing", "ParameterError", "RepairWarning", "Round", "RoundStats", "ShapeError", "Verification", "Volume",
-    "ball_volume", "pack", "rotation", "verify", *_shape_names,
+    "ball_volume", "pack", "pack_sizes", "SizeDistribution", "SizeReport", "rotation", "verify", *_shape_names,
 ]

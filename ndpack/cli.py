@@ -144,7 +144,10 @@ def _parser() -> argparse.ArgumentParser:
     pack.add_argument("--format", help="the output format where the suffix does not say (e.g. curobo, medial)")
     pack.add_argument("--option", action="append", default=[], metavar="KEY=VALUE", type=_option,
                       help="a format option, repeatable: encoding=ascii, subdivisions=2, link=cow (see below)")
-    pack.add_argument("--min-radius", type=float, default=0.0, help="stop below this radius")
+    pack.add_argument("--min-radius", type=float, default=0.0,
+                      help="no sphere smaller than this: the run stops when none fits")
+    pack.add_argument("--max-radius", type=float,
+                      help="no sphere larger than this (equal to --min-radius: equal spheres)")
     pack.add_argument("--fill", type=float, help="stop at this fill fraction")
     pack.add_argument("--time", type=float, dest="time_budget", help="stop after this many seconds")
     pack.add_argument("--grid", type=int, help="grid cells along the longest side")
@@ -218,6 +221,7 @@ def _pack(args) -> int:
         shape,
         n=args.count,
         min_radius=args.min_radius,
+        max_radius=args.max_radius,
         fill=args.fill,
         time_budget=args.time_budget,
         grid=args.grid,

@@ -1,22 +1,27 @@
 """Packing files: every format ndpack writes, and reads back, chosen by suffix or by name.
 
-=======  ==============  ====  ==============================================================
-name     suffixes        dims  what is kept
-=======  ==============  ====  ==============================================================
-npz      .npz            any   everything: metadata, spheres, rounds, round stats, medial axis
-csv      .csv            any   metadata (first line), spheres and rounds
-json     .json           any   everything, as plain JSON
-ply      .ply            1-3   spheres and rounds (one point per sphere), metadata as a comment
-vtp      .vtp            1-3   spheres as VTK points with radius, diameter and round (ParaView)
-mesh     .obj .stl .glb  3     an icosphere per sphere: centres and radii (float32 in STL, GLB)
-sph      .sph            3     spheres as a 2-level sphere tree (sphere-tree toolkit)
-curobo   .json           3     spheres as cuRobo ``collision_spheres`` of one link
-medial   .ply .csv       any   the medial-axis sample (points and radii); .ply up to 3-D
-=======  ==============  ====  ==============================================================
+========  ==============  ====  ======================================================================
+name      suffixes        dims  what is kept
+========  ==============  ====  ======================================================================
+npz       .npz            any   everything: metadata, spheres, rounds, round stats, medial axis
+csv       .csv            any   metadata (first line), spheres and rounds
+json      .json           any   everything, as plain JSON
+ply       .ply            1-3   spheres and rounds (one point per sphere), metadata as a comment
+vtp       .vtp            1-3   spheres as VTK points with radius, diameter and round (ParaView)
+mesh      .obj .stl .glb  3     an icosphere per sphere: centres and radii (float32 in STL, GLB)
+sph       .sph            3     spheres as a 2-level sphere tree (sphere-tree toolkit)
+curobo    .json           3     spheres as cuRobo ``collision_spheres`` of one link
+lammps    .data           2-3   spheres, a density and a box: LAMMPS ``read_data``, atom_style sphere
+liggghts  .data           2-3   the same rows, for LIGGGHTS ``read_data`` (atom_style granular)
+yade      .txt            3     spheres as ``x y z r`` lines: Yade's ``ymport.text``
+medial    .ply .csv       any   the medial-axis sample (points and radii); .ply up to 3-D
+========  ==============  ====  ======================================================================
 
 :func:`save` picks the format from the suffix (the first name listed for it) unless ``format=``
-names one: ``curobo`` and ``medial`` are only chosen by name. :func:`load` reads every format
-but ``medial`` (read with :func:`load_medial`); a ``.json`` file is told apart by its content.
+names one: ``curobo``, ``liggghts`` and ``medial`` are only chosen by name. Named, ``lammps``
+and ``liggghts`` take any file name (LAMMPS users often write ``data.bed``). :func:`load` reads
+every format but ``medial`` (read with :func:`load_medial`); a ``.json`` file is told apart by
+its content. The DEM formats (lammps, liggghts, yade) are written by :mod:`ndpack.dem_formats`.
 Files that hold only spheres load as a :class:`~ndpack.packing.Packing` whose volume is unknown
 (NaN, so its fill is NaN), whose rounds are 0, and whose params are empty.
 
@@ -40,6 +45,7 @@ from typing import Callable
 
 import numpy as np
 
+from . import dem_formats
 from .errors import DimensionError, NdpackError
 from .packing import FORMAT_VERSION, Packing, RoundStats
 
@@ -69,12 +75,13 @@ def save(packing: Packing, path, format: str | None = None, **options) -> Path:
     packing : Packing
     path : str or Path
     format : str, optional
-        A name from :func:`names`; needed for ``curobo`` and ``medial``, whose suffixes
-        (``.json``, ``.ply``, ``.csv``) default to other formats.
+        A name from :func:`names`; needed for ``curobo``, ``liggghts`` and ``medial``, whose
+        suffixes (``.json``, ``.data``, ``.ply``, ``.csv``) default to other formats.
     **options
         Format options (see :func:`table`): ``encoding`` ("binary" or "ascii") for ply, vtp
         and medial .ply; ``header_type`` ("UInt64" or "UInt32") for vtp; ``subdivisions`` for
-        mesh; ``link`` for curobo.
+        mesh; ``link`` for curobo; ``density`` (a positive number, default 1) for lammps and
+        liggghts.
     """
     path = Path(path)
     fmt = check(path, format, packing.dim, **options)
@@ -250,7 +257,7 @@ def _resolve(path: Path, format: str | None, verb: str) -> Format:
         fmt = FORMATS.get(str(format).lower())
         if fmt is None:
             raise NdpackError(f"unknown format {format!r}: use one of {', '.join(FORMATS)}")
-        if suffix not in fmt.suffixes:
+        if suffix not in fmt.suffixes and fmt.name not in ANY_NAME:
             raise NdpackError(
                 f"cannot {verb} {path.name!r} as {fmt.name}: its file name must end in {' or '.join(fmt.suffixes)}"
             )
@@ -921,6 +928,58 @@ def _read_curobo(path: Path) -> Packing:
     return _curobo_packing(document)
 
 
+# ---------------------------------------------------------------------------------- DEM codes
+def _dem_box(packing: Packing) -> tuple[np.ndarray, np.ndarray, str]:
+    """The data file's box, its periodic axes, and a comment on where the box came from.
+
+    ``params["bounds"]`` and ``params["period"]`` (a periodic domain's cell and per-axis periods)
+    where the packing records them; else the shape's bounds; else the spheres' extent.
+    """
+    bounds, periods = packing.params.get("bounds"), packing.params.get("period")
+    where = "the packing's recorded bounds"
+    if bounds is None and packing.shape is not None:
+        bounds = np.asarray(packing.shape.bounds, dtype=np.float64)
+        where = "the shape's bounds"
+        if bounds.shape != (2, packing.dim) or not np.isfinite(bounds).all():
+            bounds = None
+    if bounds is None:
+        where = "the spheres' extent (centre -+ radius)"
+    box, periodic = dem_formats.data_box(packing.centers, packing.radii, bounds, periods)
+    return box, periodic, f"box: {where}"
+
+
+def _write_data(packing: Packing, path: Path, program: str, density) -> None:
+    _require_dim(packing.dim, range(2, 4), f"a {program} data file")
+    density = dem_formats.density_value(density)
+    box, periodic, note = _dem_box(packing)
+    dem_formats.write_data(path, packing.centers, packing.radii, box, periodic, density, program, [note])
+
+
+def _write_lammps(packing: Packing, path: Path, density=1.0) -> None:
+    """A LAMMPS data file for ``atom_style sphere`` (see :func:`ndpack.dem_formats.write_data`)."""
+    _write_data(packing, path, "LAMMPS", density)
+
+
+def _write_liggghts(packing: Packing, path: Path, density=1.0) -> None:
+    """The same rows for LIGGGHTS's ``read_data`` (see :func:`ndpack.dem_formats.write_data`)."""
+    _write_data(packing, path, "LIGGGHTS", density)
+
+
+def _read_lammps(path: Path) -> Packing:
+    centers, radii, _ = dem_formats.read_data(path)
+    return _packing({"dim": centers.shape[1]}, centers, radii)
+
+
+def _write_yade(packing: Packing, path: Path) -> None:
+    _require_dim(packing.dim, range(3, 4), "Yade's text format (.txt)")
+    dem_formats.write_yade(path, packing.centers, packing.radii)
+
+
+def _read_yade(path: Path) -> Packing:
+    centers, radii = dem_formats.read_yade(path)
+    return _packing(None, centers, radii)
+
+
 # ---------------------------------------------------------------------------------- medial axis
 def _medial_metadata(dim: int) -> dict:
     return {"format": "ndpack-medial", "version": MEDIAL_VERSION, "dim": dim}
@@ -986,6 +1045,11 @@ FORMATS: dict[str, Format] = {
         Format("sph", (".sph",), "3", "spheres, as a 2-level sphere tree", {}, _write_sph, _read_sph),
         Format("curobo", (".json",), "3", "spheres, as cuRobo collision_spheres", {"link": "body"},
                _write_curobo, _read_curobo),
+        Format("lammps", (".data",), "2-3", "spheres, density, box (LAMMPS read_data, atom_style sphere)",
+               {"density": "1.0"}, _write_lammps, _read_lammps),
+        Format("liggghts", (".data",), "2-3", "the lammps rows, for LIGGGHTS read_data", {"density": "1.0"},
+               _write_liggghts, _read_lammps),
+        Format("yade", (".txt",), "3", "spheres, as x y z r lines (Yade ymport.text)", {}, _write_yade, _read_yade),
         Format("medial", (".ply", ".csv"), "any", "the medial-axis sample (.ply: up to 3-D)",
                {"encoding": "binary|ascii"}, _write_medial, None),
     )
@@ -994,5 +1058,9 @@ FORMATS: dict[str, Format] = {
 #: The format each suffix means when ``format=`` is not given.
 SUFFIXES: dict[str, str] = {
     ".npz": "npz", ".csv": "csv", ".json": "json", ".ply": "ply", ".vtp": "vtp",
-    ".obj": "mesh", ".stl": "mesh", ".glb": "mesh", ".sph": "sph",
+    ".obj": "mesh", ".stl": "mesh", ".glb": "mesh", ".sph": "sph", ".data": "lammps", ".txt": "yade",
 }
+
+#: Formats that take any file name when ``format=`` names them (LAMMPS data files are often
+#: named ``data.NAME``).
+ANY_NAME = frozenset({"lammps", "liggghts"})

@@ -35,7 +35,7 @@ from .consistency import ensure_possible
 from .errors import KEPT_IN_ERROR, GridWarning, InvalidPackingError, ParameterError, RepairWarning, ShapeError
 from .oracle import Oracle, ball_volume, check_compatible, check_packable
 from .packing import Packing, RoundStats
-from .rounds import FAST_WINDOW, POLISH_AHEAD, POLISH_WINDOW, SPLIT_RATIO, Fast, Faithful
+from .rounds import FAST_WINDOW, POLISH_AHEAD, POLISH_WINDOW, SIZE_BAND, SPLIT_RATIO, Fast, Faithful, Sized
 from .shapes.adapters import as_oracle
 from .shapes.mesh import recorded_holes
 from .shapes.plugin import check_plugin_slopes
@@ -82,6 +82,9 @@ PIECE_SHARE, FIRST_PIECE = 0.01, 256
 #: Radii are shrunk by this fraction of the shape's scale, so that float64 rounding in the
 #: distances (about 1e-16 of the scale) can never make touching spheres overlap or poke out.
 SAFETY_MARGIN = 1e-10
+#: A sphere capped at ``max_radius`` moves toward its nearest obstacle (RunState.snug) at most this
+#: many times, until the gap left is below this fraction of its radius.
+SNUG_STEPS, SNUG_TOLERANCE = 8, 1e-9
 #: The cells' walls (lower bounds of the boundary's distance, which let deep prototypes skip
 #: the shape's distance) are lowered by this many safety margins: far above the rounding of a
 #: distance, so a skipped evaluation never changes a result.
@@ -137,7 +140,7 @@ def grid_counts(bounds: np.ndarray, grid=None) -> np.ndarray:
     return counts.astype(np.int64)
 
 
-def _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts, seed=None):
+def _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts, seed=None, max_radius=None):
     def positive_int(value, name):
         try:
             whole = not isinstance(value, bool) and float(value).is_integer() and value >= 1
@@ -153,6 +156,13 @@ def _check_parameters(n, min_radius, fill, time_budget, iterations, batch, resta
         raise ParameterError(f"restarts must be a non-negative integer, got {restarts!r}")
     if not (isinstance(min_radius, (int, float, np.number)) and np.isfinite(min_radius) and min_radius >= 0):
         raise ParameterError(f"min_radius must be a non-negative number, got {min_radius!r}")
+    if max_radius is not None:
+        if not (isinstance(max_radius, (int, float, np.number)) and not isinstance(max_radius, bool)
+                and max_radius > 0 and not np.isnan(max_radius)):
+            raise ParameterError(f"max_radius must be a positive number or None, got {max_radius!r}")
+        if max_radius < min_radius:
+            raise ParameterError(f"max_radius ({max_radius!r}) is below min_radius ({min_radius!r}): no sphere "
+                                 "could be placed; make max_radius >= min_radius (equal for equal spheres)")
     def number(value):
         return isinstance(value, (int, float, np.number)) and not isinstance(value, bool)
 
@@ -386,6 +396,47 @@ class RunState:
         new place only where its clearance grew."""
         self.prototypes.move(ids, *self.spheres, self.polish_steps, polish=True)
 
+    def snug(self, points, clearance, radii):
+        """Spheres of ``radii`` (k,) that are smaller than the free space at their ``points``
+        (k, d) (whose clearances (k,) were measured there with the spheres so far), each moved
+        toward its nearest obstacle until only the safety margin is left between them: the rest
+        of the gap stays whole for the next spheres (equal spheres pack far denser so than at
+        the gaps' centres). Returns centres (k, d).
+
+        A step by ``clearance - margin - radius`` toward the nearest obstacle keeps the margin
+        from everything, since moving a point by ``s`` lowers its clearance by at most ``s`` (a
+        distance, or a lower bound of one, is 1-Lipschitz). Where the direction is off (a
+        difference quotient across a crease of the shape's distance, as at a gap's centre) the
+        sphere stops short and steps again, up to ``SNUG_STEPS`` times, never farther than
+        ``sqrt(d)`` times the first step from where it started (the way into a corner), so that
+        one table of the spheres near each start serves every step. A step that came out closer
+        than half the margin (only rounding could do that) is taken back.
+        """
+        centers, sphere_radii = self.spheres
+        start = np.array(points, dtype=np.float64)
+        most = np.maximum(clearance - self.margin - radii, 0.0) * np.sqrt(self.dim)  # how far each may go
+        # Any point within ``most`` of a start has clearance below clearance + most: within reach.
+        reach = clearance + most * np.sqrt(self.dim) + np.abs(clearance) * 1e-9 + self.margin
+        table = self.backend.near_spheres(start - most[:, None], start + most[:, None], reach, centers, sphere_radii)
+        points, before, moving = start.copy(), start.copy(), np.arange(len(start))
+        for step in range(SNUG_STEPS + 1):
+            measured, away = self.backend.free_space(self.shape, points[moving], centers, sphere_radii, table[moving])
+            # A step aims at the margin exactly, so rounding may leave it a hair short of it; only a
+            # step that ate half of it is taken back.
+            short = measured - 0.5 * self.margin < radii[moving]
+            points[moving[short]] = before[moving[short]]
+            shift = measured - self.margin - radii[moving]
+            length = np.linalg.norm(away, axis=1)
+            go = ~short & (shift > SNUG_TOLERANCE * radii[moving]) & (length > 0)  # no direction known: it stays
+            moving, shift, away, length = moving[go], shift[go], away[go], length[go]
+            if len(moving) == 0 or step == SNUG_STEPS:
+                break
+            before[moving] = points[moving]
+            offset = points[moving] - (shift / length)[:, None] * away - start[moving]
+            far = np.linalg.norm(offset, axis=1)
+            points[moving] = start[moving] + np.minimum(1.0, most[moving] / np.maximum(far, 1e-300))[:, None] * offset
+        return points
+
     def touched(self, new_centers, new_radii):
         """The prototypes whose clearance ball the new spheres (k, d), (k,) meet: a
         :class:`Touched`, with each one's restart point just outside the nearest new sphere."""
@@ -430,6 +481,7 @@ def pack(
     n: int = 1000,
     *,
     min_radius: float = 0.0,
+    max_radius: float | None = None,
     fill: float | None = None,
     time_budget: float | None = None,
     grid=None,
@@ -453,7 +505,12 @@ def pack(
     n : int
         Stop after this many spheres.
     min_radius : float
-        Stop when the largest free sphere is smaller than this.
+        No sphere is smaller than this: the run stops when none fits (``stop_reason ==
+        "min_radius"``).
+    max_radius : float, optional
+        No sphere is larger than this: where the free space is larger, a sphere of
+        ``max_radius`` goes at the prototype's point (the largest gaps first, as without it).
+        ``min_radius == max_radius`` packs equal spheres.
     fill : float, optional
         Stop when this fraction of the volume is covered.
     time_budget : float, optional
@@ -517,7 +574,8 @@ def pack(
     """
     shape = as_oracle(shape)
     check_compatible(shape)
-    _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts, seed)
+    _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts, seed, max_radius)
+    max_radius = np.inf if max_radius is None else float(max_radius)
     on_invalid = _on_invalid(on_invalid)
     if mode not in ("faithful", "fast"):
         raise ParameterError(f"mode must be 'faithful' or 'fast', got {mode!r}")
@@ -533,7 +591,8 @@ def pack(
     backend = get_backend(backend, device=device, shape=shape)
     counts = grid_counts(shape.bounds, grid)
     params = dict(
-        n=int(n), min_radius=float(min_radius), fill=fill, time_budget=time_budget,
+        n=int(n), min_radius=float(min_radius), max_radius=None if max_radius == np.inf else max_radius,
+        fill=fill, time_budget=time_budget,
         grid=counts.tolist(), iterations=int(iterations), batch=int(batch), mode=mode,
         restarts=int(restarts), seed=seed, backend=backend.name, device=str(getattr(backend, "device", "cpu")),
         eps_start=EPS_START, eps_end=EPS_END, cooling_power=COOLING_POWER,
@@ -546,6 +605,132 @@ def pack(
     polish_ahead = POLISH_AHEAD if backend.launch_bound and mode == "fast" else None
     if mode == "fast":
         params.update(fast_eps_end=FAST_EPS_END, fast_polish_eps_end=FAST_POLISH_EPS_END, polish_ahead=polish_ahead)
+
+    def strategy(state):
+        return Fast(state, polish_ahead=polish_ahead) if mode == "fast" else Faithful(int(batch))
+
+    return run(shape, backend, strategy, counts=counts, mode=mode, iterations=iterations, restarts=restarts, seed=seed,
+               n=n, radius_range=(float(min_radius), max_radius), fill=fill, time_budget=time_budget,
+               progress=progress, on_invalid=on_invalid, on_round=on_round, params=params)
+
+
+#: pack_sizes refuses lists of more radii than this (memory of the prototypes and spheres).
+MAX_SIZED = 50_000_000
+
+
+def pack_sizes(
+    shape: Oracle,
+    distribution,
+    *,
+    n: int | None = None,
+    solid_fraction: float | None = None,
+    time_budget: float | None = None,
+    grid=None,
+    iterations: int = 50,
+    restarts: int = 8,
+    seed: int | None = 0,
+    backend=None,
+    device=None,
+    progress: bool | None = None,
+    on_invalid: str | None = None,
+    on_round=None,
+) -> Packing:
+    """Fill ``shape`` with spheres whose radii follow a size distribution (granular and DEM beds).
+
+    The distribution gives the list of radii (:meth:`~ndpack.sizes.SizeDistribution.radii`),
+    ``n`` of them or as many as make up ``solid_fraction`` of the shape's volume; the largest
+    go first, each where the prototypes' clearance field finds room for it, in fast-mode
+    rounds (:class:`~ndpack.rounds.Sized`). Radii for which no room is left are given up and
+    counted in ``packing.params["unplaced"]``; ``distribution.report(packing)`` measures what
+    was achieved (Kolmogorov-Smirnov distance, class shares, solid fraction).
+
+    Parameters
+    ----------
+    shape : Oracle
+        Any ndpack shape or plug-in, bounded, of any dimension.
+    distribution : SizeDistribution
+        See :class:`ndpack.sizes.SizeDistribution` (``discrete``, ``cumulative``, ``lognormal``;
+        by count or by mass).
+    n : int, optional
+        How many spheres.
+    solid_fraction : float, optional
+        Instead of ``n``: the share of the shape's volume the spheres should fill (the count
+        follows from the distribution's mean volume). A fraction the shape cannot take ends
+        with radii unplaced, the smallest ones last.
+    Others
+        As in :func:`pack` (its fast mode).
+
+    Returns
+    -------
+    Packing
+        Verified in float64, like every packing; ``stop_reason`` is ``"count"`` when every radius
+        was placed, ``"no_room"`` when some were given up.
+    """
+    from .sizes import SizeDistribution
+
+    shape = as_oracle(shape)
+    check_compatible(shape)
+    if not isinstance(distribution, SizeDistribution):
+        raise ParameterError("distribution must be an ndpack.SizeDistribution (SizeDistribution.discrete, "
+                             f".cumulative or .lognormal), got {distribution!r}")
+    if (n is None) == (solid_fraction is None):
+        raise ParameterError("give either n (the number of spheres) or solid_fraction (the share of the volume), "
+                             "not both and not neither")
+    if solid_fraction is not None and not (isinstance(solid_fraction, (int, float, np.number))
+                                           and not isinstance(solid_fraction, bool) and 0 < solid_fraction < 1):
+        raise ParameterError(f"solid_fraction must lie in (0, 1), got {solid_fraction!r}")
+    _check_parameters(1 if n is None else n, 0.0, None, time_budget, iterations, 1, restarts, seed)
+    on_invalid = _on_invalid(on_invalid)
+    if on_round is not None and not callable(on_round):
+        raise ParameterError(f"on_round must be a function of one argument (an ndpack.Round), got {on_round!r}")
+    check_packable(shape)
+    check_plugin_slopes(shape)
+    count = n
+    if solid_fraction is not None:
+        volume = shape.volume().value
+        count = max(1, int(round(solid_fraction * volume / distribution.mean_volume(shape.dim))))
+    if count > MAX_SIZED:
+        raise ParameterError(f"the distribution asks for {count:,} spheres, more than {MAX_SIZED:,}: ask for a lower "
+                             "solid_fraction or n, or larger radii")
+    radii = distribution.radii(shape.dim, int(count))
+    if radii[0] > 0.5 * float(np.max(shape.bounds[1] - shape.bounds[0])):
+        raise ParameterError(f"the distribution's largest radius, {radii[0]:.4g}, is more than half the shape's "
+                             "largest extent: no such sphere fits; scale the distribution to the shape")
+    backend = get_backend(backend, device=device, shape=shape)
+    counts = grid_counts(shape.bounds, grid)
+    polish_ahead = POLISH_AHEAD if backend.launch_bound else None
+    params = dict(
+        n=int(count), distribution=distribution.description, solid_fraction=solid_fraction, time_budget=time_budget,
+        grid=counts.tolist(), iterations=int(iterations), mode="sized", restarts=int(restarts), seed=seed,
+        backend=backend.name, device=str(getattr(backend, "device", "cpu")), eps_start=EPS_START, eps_end=EPS_END,
+        cooling_power=COOLING_POWER, polish_iterations=POLISH_ITERATIONS, safety_margin=SAFETY_MARGIN,
+        fast_window=FAST_WINDOW, split_ratio=SPLIT_RATIO, size_band=SIZE_BAND, fast_eps_end=FAST_EPS_END,
+        fast_polish_eps_end=FAST_POLISH_EPS_END, polish_ahead=polish_ahead,
+    )
+    holes = recorded_holes(shape)
+    if holes is not None:
+        params["holes"] = holes
+    made = []
+
+    def strategy(state):
+        made.append(Sized(state, radii, polish_ahead=polish_ahead))
+        return made[0]
+
+    packing = run(shape, backend, strategy, counts=counts, mode="fast", iterations=iterations, restarts=restarts,
+                  seed=seed, n=len(radii), radius_range=(0.0, np.inf), fill=None, time_budget=time_budget,
+                  progress=progress, on_invalid=on_invalid, on_round=on_round, params=params)
+    if made:  # what was left: given up for want of room, or not reached (time, interrupt)
+        packing.params["unplaced"] = int(len(made[0].unplaced))
+        packing.params["unplaced_largest"] = float(made[0].unplaced.max()) if len(made[0].unplaced) else None
+    return packing
+
+
+def run(shape, backend, strategy, *, counts, mode, iterations, restarts, seed, n, radius_range, fill, time_budget,
+        progress, on_invalid, on_round, params) -> Packing:
+    """One packing run of a driver whose parameters are checked: places the prototypes, runs
+    the rounds of ``strategy(state)`` (a round strategy of :mod:`ndpack.rounds`, made over
+    the run's :class:`RunState`) until a limit, and returns the packing, verified in float64.
+    ``radius_range`` is ``(min_radius, max_radius)``; ``params`` are recorded in the packing."""
     started = time.perf_counter()
     steps, polish_steps = schedules(mode, int(iterations))
     deadline = None if time_budget is None else started + time_budget
@@ -557,14 +742,14 @@ def pack(
             f"the volume of {shape!r} came out as {volume.value:g}: the shape is too thin for a "
             "Monte Carlo estimate over its bounds; tighten the bounds or give the shape an exact volume"
         )
-    strategy = Fast(state, polish_ahead=polish_ahead) if mode == "fast" else Faithful(int(batch))
+    strategy = strategy(state)
     medial_axis, medial_radii = state.prototypes.all()
     stats = []  # (seconds, count, fill) after each round
     show = sys.stderr.isatty() if progress is None else progress
     bar = tqdm(total=int(n), unit="sphere", disable=not show, dynamic_ncols=True)
     try:
-        stop_reason = _run_rounds(state, strategy, int(n), float(min_radius), fill, volume.value, started, stats,
-                                  bar, on_round)
+        stop_reason = _run_rounds(state, strategy, int(n), radius_range, fill, volume.value,
+                                  started, stats, bar, on_round)
     except KeyboardInterrupt:
         stop_reason = "interrupted"
     finally:
@@ -615,9 +800,11 @@ class Round:
     state: RunState
 
 
-def _run_rounds(state, strategy, n, min_radius, fill, volume, started, stats, bar, on_round):
-    """The rounds of one run, until a limit; returns why it stopped. Appends each round's
-    (seconds, count, fill) to ``stats``, whole, so that an interrupt leaves whole rows."""
+def _run_rounds(state, strategy, n, radius_range, fill, volume, started, stats, bar, on_round):
+    """The rounds of one run, until a limit; returns why it stopped. ``radius_range`` is
+    ``(min_radius, max_radius)``. Appends each round's (seconds, count, fill) to ``stats``,
+    whole, so that an interrupt leaves whole rows."""
+    min_radius, max_radius = radius_range
     covered = 0.0
     while True:
         if state.count >= n:
@@ -626,9 +813,9 @@ def _run_rounds(state, strategy, n, min_radius, fill, volume, started, stats, ba
             return "fill"
         if state.out_of_time():
             return "time"
-        centers, radii = strategy.choose(state, min_radius, n - state.count)
+        centers, radii = strategy.choose(state, min_radius, n - state.count, max_radius)
         if len(radii) == 0 and state.revive():
-            centers, radii = strategy.choose(state, min_radius, n - state.count)
+            centers, radii = strategy.choose(state, min_radius, n - state.count, max_radius)
         if len(radii) == 0:
             if state.out_of_time():  # a revival cut short proves nothing about room
                 return "time"

@@ -23,7 +23,7 @@ MESHES = ROOT / "tests" / "data" / "meshes"
 MESH_FILES = {"cow.obj": "cow.ply", "armadillo.obj": "armadillo-20k.ply", "fandisk.obj": "fandisk.ply"}
 
 #: Pages whose snippets must run.
-PAGES = ["quickstart.md", "guide.md", "plugins.md", "formats.md", "backends.md", "meshes.md"]
+PAGES = ["quickstart.md", "guide.md", "plugins.md", "formats.md", "backends.md", "meshes.md", "dem.md"]
 
 MAX_SPHERES = 150
 SKIP_MARK = "<!-- not run -->"

@@ -240,14 +240,15 @@ def test_medial_and_packing_files_are_not_mixed_up(cube, tmp_path):
 
 # ---------------------------------------------------------------------------------- errors
 def test_format_table():
-    assert formats.names() == ["npz", "csv", "json", "ply", "vtp", "mesh", "sph", "curobo", "medial"]
+    assert formats.names() == ["npz", "csv", "json", "ply", "vtp", "mesh", "sph", "curobo", "lammps", "liggghts",
+                               "yade", "medial"]
     text = formats.table()
     assert all(name in text for name in formats.names()) and ".glb" in text and "subdivisions=1" in text
 
 
 def test_unknown_suffix_name_and_option(cube, tmp_path):
-    with pytest.raises(nd.NdpackError, match=r"unknown suffix '\.txt'.*\.npz or \.csv.*\.ply.*\.sph"):
-        cube.save(tmp_path / "p.txt")
+    with pytest.raises(nd.NdpackError, match=r"unknown suffix '\.xyz'.*\.npz or \.csv.*\.ply.*\.sph"):
+        cube.save(tmp_path / "p.xyz")
     with pytest.raises(nd.NdpackError, match="unknown format 'xyz'.*curobo"):
         cube.save(tmp_path / "p.ply", format="xyz")
     with pytest.raises(nd.NdpackError, match=r"as curobo: its file name must end in \.json"):

@@ -55,7 +55,7 @@ def test_bad_files_get_clear_errors(packing, tmp_path):
     with pytest.raises(nd.NdpackError, match="no such packing file"):
         nd.Packing.load(tmp_path / "missing.npz")
     with pytest.raises(nd.NdpackError, match=r"\.npz or \.csv"):
-        packing.save(tmp_path / "part.txt")
+        packing.save(tmp_path / "part.xyz")
     (tmp_path / "other.csv").write_text("a,b\n1,2\n")
     with pytest.raises(nd.NdpackError, match="not a readable ndpack packing"):
         nd.Packing.load(tmp_path / "other.csv")
