@@ -140,6 +140,11 @@ def grid_counts(bounds: np.ndarray, grid=None) -> np.ndarray:
     return counts.astype(np.int64)
 
 
+def _number(value) -> bool:
+    """Whether ``value`` is a plain number (a bool is not one)."""
+    return isinstance(value, (int, float, np.number)) and not isinstance(value, bool)
+
+
 def _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts, seed=None, max_radius=None):
     def positive_int(value, name):
         try:
@@ -157,18 +162,14 @@ def _check_parameters(n, min_radius, fill, time_budget, iterations, batch, resta
     if not (isinstance(min_radius, (int, float, np.number)) and np.isfinite(min_radius) and min_radius >= 0):
         raise ParameterError(f"min_radius must be a non-negative number, got {min_radius!r}")
     if max_radius is not None:
-        if not (isinstance(max_radius, (int, float, np.number)) and not isinstance(max_radius, bool)
-                and max_radius > 0 and not np.isnan(max_radius)):
+        if not (_number(max_radius) and max_radius > 0):  # NaN fails the comparison
             raise ParameterError(f"max_radius must be a positive number or None, got {max_radius!r}")
         if max_radius < min_radius:
             raise ParameterError(f"max_radius ({max_radius!r}) is below min_radius ({min_radius!r}): no sphere "
                                  "could be placed; make max_radius >= min_radius (equal for equal spheres)")
-    def number(value):
-        return isinstance(value, (int, float, np.number)) and not isinstance(value, bool)
-
-    if fill is not None and not (number(fill) and 0 < fill < 1):
+    if fill is not None and not (_number(fill) and 0 < fill < 1):
         raise ParameterError(f"fill (the target fill fraction) must lie in (0, 1), got {fill!r}")
-    if time_budget is not None and not (number(time_budget) and 0 < time_budget < np.inf):
+    if time_budget is not None and not (_number(time_budget) and 0 < time_budget < np.inf):
         raise ParameterError(f"time_budget must be a positive number of seconds (finite), got {time_budget!r}")
     try:  # what numpy takes as a seed, less a bool or a float (which it would take or misread)
         usable = not isinstance(seed, (bool, float, str)) and (np.random.default_rng(seed) is not None)
@@ -509,8 +510,9 @@ def pack(
         "min_radius"``).
     max_radius : float, optional
         No sphere is larger than this: where the free space is larger, a sphere of
-        ``max_radius`` goes at the prototype's point (the largest gaps first, as without it).
-        ``min_radius == max_radius`` packs equal spheres.
+        ``max_radius`` goes there, moved from the prototype's point until it touches the
+        nearest obstacle (:meth:`RunState.snug`); the fast mode fills the tightest of such gaps
+        first. ``min_radius == max_radius`` packs equal spheres.
     fill : float, optional
         Stop when this fraction of the volume is covered.
     time_budget : float, optional
@@ -576,7 +578,6 @@ def pack(
     check_compatible(shape)
     _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts, seed, max_radius)
     max_radius = np.inf if max_radius is None else float(max_radius)
-    on_invalid = _on_invalid(on_invalid)
     if mode not in ("faithful", "fast"):
         raise ParameterError(f"mode must be 'faithful' or 'fast', got {mode!r}")
     if mode == "fast" and batch != 1:
@@ -584,25 +585,15 @@ def pack(
             f"batch={batch!r} applies to the faithful mode only: the fast mode takes every candidate "
             f"within {FAST_WINDOW:.0%} of the largest a round; drop batch or use mode='faithful'"
         )
-    if on_round is not None and not callable(on_round):
-        raise ParameterError(f"on_round must be a function of one argument (an ndpack.Round), got {on_round!r}")
-    check_packable(shape)
-    check_plugin_slopes(shape)
+    on_invalid = _check_run(shape, on_invalid, on_round)
     backend = get_backend(backend, device=device, shape=shape)
     counts = grid_counts(shape.bounds, grid)
+    polish_ahead = POLISH_AHEAD if backend.launch_bound and mode == "fast" else None
     params = dict(
         n=int(n), min_radius=float(min_radius), max_radius=None if max_radius == np.inf else max_radius,
-        fill=fill, time_budget=time_budget,
-        grid=counts.tolist(), iterations=int(iterations), batch=int(batch), mode=mode,
-        restarts=int(restarts), seed=seed, backend=backend.name, device=str(getattr(backend, "device", "cpu")),
-        eps_start=EPS_START, eps_end=EPS_END, cooling_power=COOLING_POWER,
-        polish_iterations=POLISH_ITERATIONS, polish_window=POLISH_WINDOW, safety_margin=SAFETY_MARGIN,
-        fast_window=FAST_WINDOW, split_ratio=SPLIT_RATIO,
+        fill=fill, time_budget=time_budget, batch=int(batch), mode=mode, polish_window=POLISH_WINDOW,
+        **_run_params(shape, backend, counts, iterations, restarts, seed),
     )
-    holes = recorded_holes(shape)
-    if holes is not None:  # what inside means at a mesh's holes: verify and render reload it so
-        params["holes"] = holes
-    polish_ahead = POLISH_AHEAD if backend.launch_bound and mode == "fast" else None
     if mode == "fast":
         params.update(fast_eps_end=FAST_EPS_END, fast_polish_eps_end=FAST_POLISH_EPS_END, polish_ahead=polish_ahead)
 
@@ -611,7 +602,32 @@ def pack(
 
     return run(shape, backend, strategy, counts=counts, mode=mode, iterations=iterations, restarts=restarts, seed=seed,
                n=n, radius_range=(float(min_radius), max_radius), fill=fill, time_budget=time_budget,
-               progress=progress, on_invalid=on_invalid, on_round=on_round, params=params)
+               progress=progress, on_invalid=on_invalid, on_round=on_round, params=params)[0]
+
+
+def _check_run(shape, on_invalid, on_round) -> str:
+    """The checks every driver makes of the shape and of ``on_round``; returns ``on_invalid``,
+    checked (see :func:`_on_invalid`)."""
+    on_invalid = _on_invalid(on_invalid)
+    if on_round is not None and not callable(on_round):
+        raise ParameterError(f"on_round must be a function of one argument (an ndpack.Round), got {on_round!r}")
+    check_packable(shape)
+    check_plugin_slopes(shape)
+    return on_invalid
+
+
+def _run_params(shape, backend, counts, iterations, restarts, seed) -> dict:
+    """The parameters every driver records: the grid, the schedules, the backend, the holes."""
+    params = dict(
+        grid=counts.tolist(), iterations=int(iterations), restarts=int(restarts), seed=seed, backend=backend.name,
+        device=str(getattr(backend, "device", "cpu")), eps_start=EPS_START, eps_end=EPS_END,
+        cooling_power=COOLING_POWER, polish_iterations=POLISH_ITERATIONS, safety_margin=SAFETY_MARGIN,
+        fast_window=FAST_WINDOW, split_ratio=SPLIT_RATIO,
+    )
+    holes = recorded_holes(shape)
+    if holes is not None:  # what inside means at a mesh's holes: verify and render reload it so
+        params["holes"] = holes
+    return params
 
 
 #: pack_sizes refuses lists of more radii than this (memory of the prototypes and spheres).
@@ -676,15 +692,10 @@ def pack_sizes(
     if (n is None) == (solid_fraction is None):
         raise ParameterError("give either n (the number of spheres) or solid_fraction (the share of the volume), "
                              "not both and not neither")
-    if solid_fraction is not None and not (isinstance(solid_fraction, (int, float, np.number))
-                                           and not isinstance(solid_fraction, bool) and 0 < solid_fraction < 1):
+    if solid_fraction is not None and not (_number(solid_fraction) and 0 < solid_fraction < 1):
         raise ParameterError(f"solid_fraction must lie in (0, 1), got {solid_fraction!r}")
     _check_parameters(1 if n is None else n, 0.0, None, time_budget, iterations, 1, restarts, seed)
-    on_invalid = _on_invalid(on_invalid)
-    if on_round is not None and not callable(on_round):
-        raise ParameterError(f"on_round must be a function of one argument (an ndpack.Round), got {on_round!r}")
-    check_packable(shape)
-    check_plugin_slopes(shape)
+    on_invalid = _check_run(shape, on_invalid, on_round)
     count = n
     if solid_fraction is not None:
         volume = shape.volume().value
@@ -701,36 +712,30 @@ def pack_sizes(
     polish_ahead = POLISH_AHEAD if backend.launch_bound else None
     params = dict(
         n=int(count), distribution=distribution.description, solid_fraction=solid_fraction, time_budget=time_budget,
-        grid=counts.tolist(), iterations=int(iterations), mode="sized", restarts=int(restarts), seed=seed,
-        backend=backend.name, device=str(getattr(backend, "device", "cpu")), eps_start=EPS_START, eps_end=EPS_END,
-        cooling_power=COOLING_POWER, polish_iterations=POLISH_ITERATIONS, safety_margin=SAFETY_MARGIN,
-        fast_window=FAST_WINDOW, split_ratio=SPLIT_RATIO, size_band=SIZE_BAND, fast_eps_end=FAST_EPS_END,
-        fast_polish_eps_end=FAST_POLISH_EPS_END, polish_ahead=polish_ahead,
+        mode="sized", size_band=SIZE_BAND, fast_eps_end=FAST_EPS_END, fast_polish_eps_end=FAST_POLISH_EPS_END,
+        polish_ahead=polish_ahead, **_run_params(shape, backend, counts, iterations, restarts, seed),
     )
-    holes = recorded_holes(shape)
-    if holes is not None:
-        params["holes"] = holes
-    made = []
 
     def strategy(state):
-        made.append(Sized(state, radii, polish_ahead=polish_ahead))
-        return made[0]
+        return Sized(state, radii, polish_ahead=polish_ahead)
 
-    packing = run(shape, backend, strategy, counts=counts, mode="fast", iterations=iterations, restarts=restarts,
-                  seed=seed, n=len(radii), radius_range=(0.0, np.inf), fill=None, time_budget=time_budget,
-                  progress=progress, on_invalid=on_invalid, on_round=on_round, params=params)
-    if made:  # what was left: given up for want of room, or not reached (time, interrupt)
-        packing.params["unplaced"] = int(len(made[0].unplaced))
-        packing.params["unplaced_largest"] = float(made[0].unplaced.max()) if len(made[0].unplaced) else None
+    packing, sized = run(shape, backend, strategy, counts=counts, mode="fast", iterations=iterations,
+                         restarts=restarts, seed=seed, n=len(radii), radius_range=(0.0, np.inf), fill=None,
+                         time_budget=time_budget, progress=progress, on_invalid=on_invalid, on_round=on_round,
+                         params=params)
+    # Given up for want of room (radii not reached by a time limit or an interrupt are not counted).
+    packing.params["unplaced"] = int(len(sized.unplaced))
+    packing.params["unplaced_largest"] = float(sized.unplaced.max()) if len(sized.unplaced) else None
     return packing
 
 
 def run(shape, backend, strategy, *, counts, mode, iterations, restarts, seed, n, radius_range, fill, time_budget,
-        progress, on_invalid, on_round, params) -> Packing:
+        progress, on_invalid, on_round, params):
     """One packing run of a driver whose parameters are checked: places the prototypes, runs
     the rounds of ``strategy(state)`` (a round strategy of :mod:`ndpack.rounds`, made over
-    the run's :class:`RunState`) until a limit, and returns the packing, verified in float64.
-    ``radius_range`` is ``(min_radius, max_radius)``; ``params`` are recorded in the packing."""
+    the run's :class:`RunState`) until a limit, and returns the packing, verified in float64,
+    and the strategy (what it kept of the run). ``radius_range`` is ``(min_radius,
+    max_radius)``; ``params`` are recorded in the packing."""
     started = time.perf_counter()
     steps, polish_steps = schedules(mode, int(iterations))
     deadline = None if time_budget is None else started + time_budget
@@ -768,7 +773,7 @@ def run(shape, backend, strategy, *, counts, mode, iterations, restarts, seed, n
         stop_reason=stop_reason,
         shape=shape,
     )
-    return _ensure_valid(packing, shape, state.margin, getattr(backend, "precision", "float64"), on_invalid)
+    return _ensure_valid(packing, shape, state.margin, getattr(backend, "precision", "float64"), on_invalid), strategy
 
 
 @dataclass(frozen=True)

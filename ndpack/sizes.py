@@ -20,6 +20,8 @@ from .oracle import ball_volume
 
 #: A continuous distribution is handled on this many radii between its smallest and largest.
 CURVE_POINTS = 4096
+#: A continuous distribution's mean ball volume is the mean over this many of its quantiles.
+MEAN_SAMPLES = 20_000
 
 
 @dataclass(frozen=True)
@@ -121,12 +123,13 @@ class SizeDistribution:
         high = median * math.exp(3 * sigma) if high is None else float(high)
         if not 0 < low < high:
             raise ParameterError(f"a log-normal law's cut needs 0 < low < high, got {low!r} and {high!r}")
+        from scipy.special import ndtr  # the standard normal's cumulative distribution
+
         radii = np.geomspace(low, high, CURVE_POINTS)
-        normal = 0.5 * (1 + np.vectorize(math.erf)((np.log(radii / median)) / (sigma * math.sqrt(2))))
+        normal = ndtr(np.log(radii / median) / sigma)
         cdf = (normal - normal[0]) / (normal[-1] - normal[0])
-        made = cls(radii, cdf, _basis(by), False, {})
-        made.description = {"kind": "lognormal", "median": median, "sigma": sigma, "by": by, "low": low, "high": high}
-        return made
+        return cls(radii, cdf, _basis(by), False,
+                   {"kind": "lognormal", "median": median, "sigma": sigma, "by": by, "low": low, "high": high})
 
     # ------------------------------------------------------------------ use
     @property
@@ -173,11 +176,10 @@ class SizeDistribution:
 
     def mean_volume(self, dim: int) -> float:
         """The mean ball volume of a sphere drawn by count, in ``dim`` dimensions."""
-        radii = self.radii(dim, 20_000) if not self.discrete else None
-        if radii is not None:
-            return float(ball_volume(dim, radii).mean())
-        values, cdf = self._number_curve(dim)
-        return float((np.diff(cdf, prepend=0.0) * ball_volume(dim, values)).sum())
+        if self.discrete:
+            values, cdf = self._number_curve(dim)
+            return float((np.diff(cdf, prepend=0.0) * ball_volume(dim, values)).sum())
+        return float(ball_volume(dim, self.radii(dim, MEAN_SAMPLES)).mean())  # the quantiles' mean
 
     def cdf(self, radii, dim: int, left: bool = False) -> np.ndarray:
         """The target's cumulative share (on its basis) of radius ``<= radii`` (``< radii`` with
