@@ -73,6 +73,16 @@ def _numbers(text: str) -> tuple:
     return values
 
 
+def _periodic_axes(text: str):
+    """``--periodic``: ``all`` or axis numbers, ``0,2``."""
+    if text.strip().lower() == "all":
+        return "all"
+    try:
+        return tuple(int(part) for part in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 'all' or axis numbers such as 0,1, got {text!r}") from None
+
+
 def _seed(text: str) -> int:
     if not text.strip().isdigit():
         raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
@@ -148,6 +158,12 @@ def _parser() -> argparse.ArgumentParser:
                       help="no sphere smaller than this: the run stops when none fits")
     pack.add_argument("--max-radius", type=float,
                       help="no sphere larger than this (equal to --min-radius: equal spheres)")
+    pack.add_argument("--periodic", type=_periodic_axes, metavar="AXES",
+                      help="make these axes of the shape's bounding box periodic: all, or numbers such as 0,1 "
+                      "(a periodic box: box:dim=4 --periodic all)")
+    pack.add_argument("--centers-only", action="store_true",
+                      help="only the centres must lie inside (needs --max-radius): spheres may reach past the "
+                      "walls by their radius, as DEM codes cut a bed by centre")
     pack.add_argument("--fill", type=float, help="stop at this fill fraction")
     pack.add_argument("--time", type=float, dest="time_budget", help="stop after this many seconds")
     pack.add_argument("--grid", type=int, help="grid cells along the longest side")
@@ -210,6 +226,10 @@ def _pack(args) -> int:
     if args.dim is not None:
         source += ("," if ":" in source else ":") + f"dim={args.dim}"
     shape = load_shape(source, args.holes)
+    if args.periodic is not None:
+        from .shapes.periodic import Periodic
+
+        shape = Periodic(shape, None if args.periodic == "all" else args.periodic)
     options = dict(args.option)
     if args.output:
         _check_output(args.output, args.format, shape.dim, options)
@@ -233,6 +253,7 @@ def _pack(args) -> int:
         device=args.device,
         progress=not args.quiet and sys.stderr.isatty(),
         on_invalid=args.on_invalid,
+        centers_only=args.centers_only,
     )
     elapsed = time.perf_counter() - started
     packing.params["source"] = describe(source)
@@ -327,7 +348,7 @@ def _recorded_shape(packing, override: str | None, required: bool, trust: bool =
     from .sources import code_in, is_mesh_file, load_shape
 
     if override:
-        return load_shape(override, holes)
+        return _with_recorded_period(load_shape(override, holes), packing)
     source = packing.params.get("source")
     if source is None:
         if required:
@@ -344,7 +365,21 @@ def _recorded_shape(packing, override: str | None, required: bool, trust: bool =
         return None
     if holes is None and is_mesh_file(str(source)):
         holes = _recorded_holes(packing)
-    return load_shape(str(source), holes)
+    return _with_recorded_period(load_shape(str(source), holes), packing)
+
+
+def _with_recorded_period(shape, packing):
+    """``shape`` made periodic along the axes whose period the packing records
+    (``params["period"]``, one period or None per axis), checked: a file may hold anything."""
+    periods = packing.params.get("period")
+    if periods is None:
+        return shape
+    from .shapes.periodic import Periodic
+
+    if not isinstance(periods, (list, tuple)) or len(periods) != shape.dim:
+        raise NdpackError(f"the packing's recorded periods ({periods!r}) are not one per axis of the {shape.dim}-D "
+                          "shape: pass --shape with the right shape")
+    return Periodic(shape, [period is not None for period in periods])
 
 
 def _recorded_holes(packing) -> str | None:

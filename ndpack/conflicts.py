@@ -34,9 +34,10 @@ def widened(reach):
     return reach + 1e-9 * np.abs(reach)
 
 
-def disjoint_greedy(centers, radii, margin):
+def disjoint_greedy(centers, radii, margin, period=None):
     """Positions of a greedy disjoint subset: each sphere is kept unless it comes within
-    ``margin`` of one kept before it. ``centers`` (k, d), ``radii`` (k,) in priority order.
+    ``margin`` of one kept before it. ``centers`` (k, d), ``radii`` (k,) in priority order; in a
+    periodic domain (``period``, a :class:`~ndpack.period.Period`) between their nearest images.
 
     Returns (j,) int64 positions, ascending.
 
@@ -48,55 +49,67 @@ def disjoint_greedy(centers, radii, margin):
     pairs, 5.5 s); elsewhere the pairs of all are searched at once, as without it. Either way the
     result is the same: a sphere a kept one excludes never excludes another.
     """
-    from scipy.spatial import cKDTree
-
     count = len(radii)
     if count <= 1:
         return np.arange(count)
     head = min(count, FEW_LARGE)
     first, second = np.triu_indices(head, 1)
-    meet = _meet(centers, radii, first, second, margin)
+    meet = _meet(centers, radii, first, second, margin, period)
     leaders = greedy_over_pairs(head, first[meet], second[meet])
     if head == count:
         return leaders
-    tree = cKDTree(centers)
-    found = tree.query_ball_point(centers[leaders], widened(radii[leaders] + radii[head:].max() + margin))
+    tree, frame = _tree(centers, widened(2 * radii.max() + margin), period)
+    found = tree.query_ball_point(frame[leaders], widened(radii[leaders] + radii[head:].max() + margin))
     lengths = [len(near) for near in found]
     first = np.repeat(leaders, lengths)
     second = np.concatenate(found).astype(np.int64)
     beyond = second >= head
     first, second = first[beyond], second[beyond]
     excluded = np.zeros(count, dtype=bool)
-    excluded[second[_meet(centers, radii, first, second, margin)]] = True
+    excluded[second[_meet(centers, radii, first, second, margin, period)]] = True
     rest = np.flatnonzero(~excluded[head:]) + head
     if len(rest) <= (count - head) / 2:
-        return np.concatenate([leaders, rest[disjoint_greedy(centers[rest], radii[rest], margin)]])
-    return _greedy_by_pairs(tree, centers, radii, margin)
+        return np.concatenate([leaders, rest[disjoint_greedy(centers[rest], radii[rest], margin, period)]])
+    return _greedy_by_pairs(tree, frame, centers, radii, margin, period)
 
 
-def _meet(centers, radii, first, second, margin):
+def _tree(centers, reach, period):
+    """A k-d tree of ``centers`` (k, d) for searches within ``reach``, and the points (k, d) to
+    query it with: in a periodic domain a tree that wraps, in its own frame."""
+    from scipy.spatial import cKDTree
+
+    if period is None:
+        return cKDTree(centers), centers
+    return period.tree(centers, reach)
+
+
+def _meet(centers, radii, first, second, margin, period=None):
     """(p,) bool: whether spheres ``first[p]`` and ``second[p]`` come within ``margin`` (one
     formula for every path of :func:`disjoint_greedy`, so that they decide alike to the bit)."""
-    gap = np.linalg.norm(centers[first] - centers[second], axis=1) - radii[first] - radii[second]
+    delta = centers[first] - centers[second]
+    if period is not None:
+        delta = period.difference(centers[first], centers[second])
+    gap = np.linalg.norm(delta, axis=1) - radii[first] - radii[second]
     return (gap < margin) & (first != second)
 
 
-def _greedy_by_pairs(tree, centers, radii, margin):
-    """:func:`disjoint_greedy` over every pair that may meet, found in the k-d ``tree`` of ``centers``."""
+def _greedy_by_pairs(tree, frame, centers, radii, margin, period=None):
+    """:func:`disjoint_greedy` over every pair that may meet, found in the k-d ``tree`` of
+    ``centers`` (whose points are ``frame``, see :func:`_tree`)."""
     count = len(radii)
     # Pairs that may meet: two of the rest within twice their largest radius, and each of the
     # few largest with any sphere within its radius and the largest.
     large, largest = few_largest(radii)
     pairs = [tree.query_pairs(widened(2 * largest + margin), output_type="ndarray")]
     if len(large):
-        partners = tree.query_ball_point(centers[large], widened(radii[large] + radii.max() + margin))
+        partners = tree.query_ball_point(frame[large], widened(radii[large] + radii.max() + margin))
         lengths = [len(found) for found in partners]
         pairs.append(np.stack([np.repeat(large, lengths), np.concatenate(partners).astype(np.int64)], axis=1))
     pairs = np.concatenate(pairs)
     if len(pairs) == 0:
         return np.arange(count)
     first, second = pairs.min(axis=1), pairs.max(axis=1)
-    meet = _meet(centers, radii, first, second, margin)
+    meet = _meet(centers, radii, first, second, margin, period)
     return greedy_over_pairs(count, first[meet], second[meet])
 
 

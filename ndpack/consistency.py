@@ -168,6 +168,8 @@ def ensure_possible(packing, shape, on_invalid: str = "repair", margin: float = 
             warnings.warn(f"{found}; they were dropped (the others rest on the same function): {cause}. The repair "
                           "is recorded in packing.repair; on_invalid='raise' raises instead", RepairWarning,
                           stacklevel=4)
+    if (packing.params or {}).get("centers_only"):
+        return packing  # spheres may reach past the walls: their volume is no bound of the shape's
     problem = volume_problem(packing)
     if problem:
         raise InvalidPackingError(f"the packing failed its final check: {problem}. {KEPT_IN_ERROR}",

@@ -35,6 +35,7 @@ from .consistency import ensure_possible
 from .errors import KEPT_IN_ERROR, GridWarning, InvalidPackingError, ParameterError, RepairWarning, ShapeError
 from .oracle import Oracle, ball_volume, check_compatible, check_packable
 from .packing import Packing, RoundStats
+from .period import period_of
 from .rounds import FAST_WINDOW, POLISH_AHEAD, POLISH_WINDOW, SIZE_BAND, SPLIT_RATIO, Fast, Faithful, Sized
 from .shapes.adapters import as_oracle
 from .shapes.mesh import recorded_holes
@@ -89,6 +90,11 @@ SNUG_STEPS, SNUG_TOLERANCE = 8, 1e-9
 #: the shape's distance) are lowered by this many safety margins: far above the rounding of a
 #: distance, so a skipped evaluation never changes a result.
 WALL_SLACK = 10.0
+#: In a periodic domain the images of a round's spheres are kept as obstacles where they come
+#: within this many times the round's largest radius of the cell (and no sphere after it is
+#: larger: :attr:`RunState.radius_cap`). The greedy radii only shrink, so twice leaves room for
+#: the late finds of the fast mode; the images kept cost a layer of that width along each face.
+IMAGE_REACH = 2.0
 
 
 def cooling_schedule(
@@ -207,7 +213,8 @@ class RunState:
     :meth:`insert`).
     """
 
-    def __init__(self, shape, backend, counts, steps, polish_steps, restarts, key, deadline=None, budget=None):
+    def __init__(self, shape, backend, counts, steps, polish_steps, restarts, key, deadline=None, budget=None,
+                 centers_in=None):
         self.shape = shape
         # time.perf_counter() at which the run's time budget (seconds, for sizing pieces) runs out
         self.deadline, self.budget = deadline, budget
@@ -226,6 +233,20 @@ class RunState:
         self.centers = np.empty((64, self.dim))
         self.radii = np.empty(64)
         self.rounds = np.empty(64, dtype=np.int64)
+        # Centres only (pack's centers_only): ``shape`` is the one grown by the largest radius, and
+        # a sphere counts (and is returned) only where its centre lies in ``centers_in``; the
+        # others stay obstacles, as in a larger packing cut by centre.
+        self.centers_in = centers_in
+        self.inside = np.empty(64, dtype=bool)
+        self.inside_count = 0
+        # A periodic domain (ndpack.Periodic): the spheres' images near the cell are obstacles too
+        # (ndpack.period), kept within ``image_reach`` of it, which is also the largest radius allowed.
+        self.period = period_of(shape)
+        self.image_reach = np.inf
+        self._obstacles = None  # (centres, radii, count) of the spheres and their images, when periodic
+        if self.period is not None:
+            self.image_reach = 0.5 * self.period.shortest - self.margin
+            self._obstacles = (np.empty((64, self.dim)), np.empty(64), 0)
         self._place_prototypes(counts)
 
     # ------------------------------------------------------------------ prototypes
@@ -350,6 +371,29 @@ class RunState:
         """The inserted spheres: centres (m, d) and radii (m,)."""
         return self.centers[: self.count], self.radii[: self.count]
 
+    @property
+    def obstacles(self):
+        """What the prototypes keep clear of: the spheres, and in a periodic domain their images
+        near the cell too; centres (m, d) and radii (m,), a list that only grows."""
+        if self._obstacles is None:
+            return self.spheres
+        centers, radii, count = self._obstacles
+        return centers[:count], radii[:count]
+
+    @property
+    def radius_cap(self) -> float:
+        """The largest radius a sphere may have now: infinite, but in a periodic domain the reach
+        of the images kept (:data:`IMAGE_REACH`; below half the shortest period)."""
+        return self.image_reach
+
+    def with_images(self, centers, radii):
+        """Spheres ``centers`` (k, d), ``radii`` (k,) and, in a periodic domain, their images
+        within :attr:`image_reach` of the cell: centres (m, d), radii (m,)."""
+        if self.period is None:
+            return centers, radii
+        image_centers, image_radii, _ = self.period.images(centers, radii, self.image_reach)
+        return np.concatenate([centers, image_centers]), np.concatenate([radii, image_radii])
+
     def reconverge(self, ids, first=None, tries=None, chunk=None, ahead=None):
         """Restart the prototypes ``ids`` (k,) at their best start and let them converge again.
 
@@ -363,7 +407,7 @@ class RunState:
         restarts = self._restarts(first, tries)
         chunk = chunk or max(1024, START_FLOATS // ((restarts.tries + 2) * self.dim))
         if len(ids) == 0 and ahead is not None:
-            self.prototypes.move(ids, *self.spheres, self.steps, ahead=ahead)
+            self.prototypes.move(ids, *self.obstacles, self.steps, ahead=ahead)
         for start in range(0, len(ids), chunk):
             part = slice(start, start + chunk)
             self._move_in_time(ids[part], restarts.part(part), ahead)
@@ -387,7 +431,7 @@ class RunState:
                 size = FIRST_PIECE if self._seconds_each is None else PIECE_SHARE * self.budget / self._seconds_each
             piece = slice(done, done + max(1, int(size)))
             started = time.perf_counter()
-            self.prototypes.move(ids[piece], *self.spheres, self.steps, restarts=restarts.part(piece), ahead=ahead)
+            self.prototypes.move(ids[piece], *self.obstacles, self.steps, restarts=restarts.part(piece), ahead=ahead)
             self._seconds_each = (time.perf_counter() - started) / len(ids[piece])
             done = piece.stop
             ahead = None if ahead is None else ahead.later()
@@ -395,7 +439,7 @@ class RunState:
     def polish(self, ids):
         """Move prototypes ``ids`` further with the finer polish schedule, keeping each one's
         new place only where its clearance grew."""
-        self.prototypes.move(ids, *self.spheres, self.polish_steps, polish=True)
+        self.prototypes.move(ids, *self.obstacles, self.polish_steps, polish=True)
 
     def snug(self, points, clearance, radii):
         """Spheres of ``radii`` (k,) that are smaller than the free space at their ``points``
@@ -413,7 +457,7 @@ class RunState:
         one table of the spheres near each start serves every step. A step that came out closer
         than half the margin (only rounding could do that) is taken back.
         """
-        centers, sphere_radii = self.spheres
+        centers, sphere_radii = self.obstacles
         start = np.array(points, dtype=np.float64)
         most = np.maximum(clearance - self.margin - radii, 0.0) * np.sqrt(self.dim)  # how far each may go
         # Any point within ``most`` of a start has clearance below clearance + most: within reach.
@@ -436,11 +480,17 @@ class RunState:
             offset = points[moving] - (shift / length)[:, None] * away - start[moving]
             far = np.linalg.norm(offset, axis=1)
             points[moving] = start[moving] + np.minimum(1.0, most[moving] / np.maximum(far, 1e-300))[:, None] * offset
+            if self.period is not None:
+                # Kept in the cell: the nearest point of a box is no farther than the step (the
+                # step's bound holds), and the images kept reach only so far from the cell.
+                points[moving] = np.clip(points[moving], self.period.lower, self.period.upper)
         return points
 
     def touched(self, new_centers, new_radii):
         """The prototypes whose clearance ball the new spheres (k, d), (k,) meet: a
-        :class:`Touched`, with each one's restart point just outside the nearest new sphere."""
+        :class:`Touched`, with each one's restart point just outside the nearest new sphere (or
+        image, in a periodic domain)."""
+        new_centers, new_radii = self.with_images(new_centers, new_radii)
         ids, points, nearest = self.prototypes.touched(new_centers, new_radii)
         centers, radii = new_centers[nearest], new_radii[nearest]
         offsets = points - centers
@@ -465,16 +515,42 @@ class RunState:
         return int(np.count_nonzero(self.prototypes.gather(dead)[1] > self.margin))
 
     def insert(self, centers, radii, round_index):
+        """Add a round's spheres ``centers`` (k, d), ``radii`` (k,); in a periodic domain their
+        centres wrapped into the cell, the reach of the images narrowed to the round's size
+        (:data:`IMAGE_REACH`) and their images within it added to the obstacles. Returns which
+        count (k,) bool: all, but with ``centers_in`` those whose centre lies in it."""
+        if self.period is not None and len(radii):
+            centers = self.period.wrap(centers)
+            self.image_reach = min(self.image_reach, IMAGE_REACH * float(np.max(radii)))
+            self._add_obstacles(*self.with_images(centers, radii))
         needed = self.count + len(radii)
         if needed > len(self.radii):
             capacity = max(needed, 2 * len(self.radii))
             self.centers = np.resize(self.centers, (capacity, self.dim))
             self.radii = np.resize(self.radii, capacity)
             self.rounds = np.resize(self.rounds, capacity)
+            self.inside = np.resize(self.inside, capacity)
+        inside = np.ones(len(radii), dtype=bool)
+        if self.centers_in is not None and len(radii):
+            inside = self.centers_in._distance(np.asarray(centers, dtype=np.float64)) < 0
         self.centers[self.count:needed] = centers
         self.radii[self.count:needed] = radii
         self.rounds[self.count:needed] = round_index
+        self.inside[self.count:needed] = inside
+        self.inside_count += int(inside.sum())
         self.count = needed  # last, so an interrupt never leaves half a sphere
+        return inside
+
+    def _add_obstacles(self, centers, radii):
+        stored_centers, stored_radii, count = self._obstacles
+        needed = count + len(radii)
+        if needed > len(stored_radii):
+            capacity = max(needed, 2 * len(stored_radii))
+            stored_centers = np.resize(stored_centers, (capacity, self.dim))
+            stored_radii = np.resize(stored_radii, capacity)
+        stored_centers[count:needed] = centers
+        stored_radii[count:needed] = radii
+        self._obstacles = (stored_centers, stored_radii, needed)
 
 
 def pack(
@@ -496,6 +572,7 @@ def pack(
     progress: bool | None = None,
     on_invalid: str | None = None,
     on_round=None,
+    centers_only: bool = False,
 ) -> Packing:
     """Fill ``shape`` with non-overlapping spheres, largest first (ProtoSphere).
 
@@ -557,6 +634,12 @@ def pack(
     on_round : callable, optional
         Called after each round with a :class:`Round` (the new spheres, count, fill, time): to
         watch a run, plot it as it goes, or stop it (return True: ``stop_reason == "callback"``).
+    centers_only : bool
+        Only the centres must lie inside ``shape`` (as DEM codes cut a bed by centre, the walls
+        pushing back what pokes through): the shape grown by ``max_radius`` (required) is packed,
+        and the spheres whose centres lie in ``shape`` count and are returned (the others were
+        obstacles, as in a larger packing cut by centre). ``params["centers_only"]`` says so,
+        and verification checks the centres.
 
     Returns
     -------
@@ -586,13 +669,14 @@ def pack(
             f"within {FAST_WINDOW:.0%} of the largest a round; drop batch or use mode='faithful'"
         )
     on_invalid = _check_run(shape, on_invalid, on_round)
-    backend = get_backend(backend, device=device, shape=shape)
-    counts = grid_counts(shape.bounds, grid)
+    packed = _centers_only(shape, max_radius, "max_radius") if centers_only else shape
+    backend = get_backend(backend, device=device, shape=packed)
+    counts = grid_counts(packed.bounds, grid)
     polish_ahead = POLISH_AHEAD if backend.launch_bound and mode == "fast" else None
     params = dict(
         n=int(n), min_radius=float(min_radius), max_radius=None if max_radius == np.inf else max_radius,
         fill=fill, time_budget=time_budget, batch=int(batch), mode=mode, polish_window=POLISH_WINDOW,
-        **_run_params(shape, backend, counts, iterations, restarts, seed),
+        **_run_params(shape, backend, counts, iterations, restarts, seed, centers_only),
     )
     if mode == "fast":
         params.update(fast_eps_end=FAST_EPS_END, fast_polish_eps_end=FAST_POLISH_EPS_END, polish_ahead=polish_ahead)
@@ -600,9 +684,22 @@ def pack(
     def strategy(state):
         return Fast(state, polish_ahead=polish_ahead) if mode == "fast" else Faithful(int(batch))
 
-    return run(shape, backend, strategy, counts=counts, mode=mode, iterations=iterations, restarts=restarts, seed=seed,
-               n=n, radius_range=(float(min_radius), max_radius), fill=fill, time_budget=time_budget,
-               progress=progress, on_invalid=on_invalid, on_round=on_round, params=params)[0]
+    return run(packed, backend, strategy, counts=counts, mode=mode, iterations=iterations, restarts=restarts,
+               seed=seed, n=n, radius_range=(float(min_radius), max_radius), fill=fill, time_budget=time_budget,
+               progress=progress, on_invalid=on_invalid, on_round=on_round, params=params,
+               centers_in=shape if centers_only else None)[0]
+
+
+def _centers_only(shape, reach: float, name: str):
+    """The shape a ``centers_only`` run packs: ``shape`` grown by ``reach`` (the largest radius,
+    given as ``name``), checked."""
+    if not np.isfinite(reach):
+        raise ParameterError(f"centers_only=True needs {name}: how far a sphere may reach past the walls (the shape "
+                             "is grown by it, and the spheres are kept by their centres)")
+    if period_of(shape) is not None:
+        raise ParameterError("centers_only=True applies to walls, and a periodic domain's cell wraps: not both yet; "
+                             "leave out centers_only or Periodic")
+    return shape.offset(reach)
 
 
 def _check_run(shape, on_invalid, on_round) -> str:
@@ -616,8 +713,9 @@ def _check_run(shape, on_invalid, on_round) -> str:
     return on_invalid
 
 
-def _run_params(shape, backend, counts, iterations, restarts, seed) -> dict:
-    """The parameters every driver records: the grid, the schedules, the backend, the holes."""
+def _run_params(shape, backend, counts, iterations, restarts, seed, centers_only=False) -> dict:
+    """The parameters every driver records: the grid, the schedules, the backend, the holes, and
+    what inside means (centres only; a periodic cell)."""
     params = dict(
         grid=counts.tolist(), iterations=int(iterations), restarts=int(restarts), seed=seed, backend=backend.name,
         device=str(getattr(backend, "device", "cpu")), eps_start=EPS_START, eps_end=EPS_END,
@@ -627,6 +725,11 @@ def _run_params(shape, backend, counts, iterations, restarts, seed) -> dict:
     holes = recorded_holes(shape)
     if holes is not None:  # what inside means at a mesh's holes: verify and render reload it so
         params["holes"] = holes
+    if centers_only:  # verify() checks the centres only
+        params["centers_only"] = True
+    period = period_of(shape)
+    if period is not None:  # the cell and its periods, which the DEM files write as a periodic box
+        params["bounds"], params["period"] = shape.bounds.tolist(), period.periods
     return params
 
 
@@ -650,6 +753,7 @@ def pack_sizes(
     progress: bool | None = None,
     on_invalid: str | None = None,
     on_round=None,
+    centers_only: bool = False,
 ) -> Packing:
     """Fill ``shape`` with spheres whose radii follow a size distribution (granular and DEM beds).
 
@@ -673,6 +777,9 @@ def pack_sizes(
         Instead of ``n``: the share of the shape's volume the spheres should fill (the count
         follows from the distribution's mean volume). A fraction the shape cannot take ends
         with radii unplaced, the smallest ones last.
+    centers_only : bool
+        Only the centres must lie inside (see :func:`pack`), the shape grown by the largest
+        radius; a radius whose sphere came out with its centre outside goes back to the list.
     Others
         As in :func:`pack` (its fast mode).
 
@@ -707,22 +814,28 @@ def pack_sizes(
     if radii[0] > 0.5 * float(np.max(shape.bounds[1] - shape.bounds[0])):
         raise ParameterError(f"the distribution's largest radius, {radii[0]:.4g}, is more than half the shape's "
                              "largest extent: no such sphere fits; scale the distribution to the shape")
-    backend = get_backend(backend, device=device, shape=shape)
-    counts = grid_counts(shape.bounds, grid)
+    period = period_of(shape)
+    if period is not None and radii[0] >= 0.5 * period.shortest:
+        raise ParameterError(f"the distribution's largest radius, {radii[0]:.4g}, is at least half the shortest "
+                             f"period, {period.shortest:.4g}: such a sphere meets its own image; scale the "
+                             "distribution to the cell")
+    packed = _centers_only(shape, float(radii[0]), "a distribution") if centers_only else shape
+    backend = get_backend(backend, device=device, shape=packed)
+    counts = grid_counts(packed.bounds, grid)
     polish_ahead = POLISH_AHEAD if backend.launch_bound else None
     params = dict(
         n=int(count), distribution=distribution.description, solid_fraction=solid_fraction, time_budget=time_budget,
         mode="sized", size_band=SIZE_BAND, fast_eps_end=FAST_EPS_END, fast_polish_eps_end=FAST_POLISH_EPS_END,
-        polish_ahead=polish_ahead, **_run_params(shape, backend, counts, iterations, restarts, seed),
+        polish_ahead=polish_ahead, **_run_params(shape, backend, counts, iterations, restarts, seed, centers_only),
     )
 
     def strategy(state):
         return Sized(state, radii, polish_ahead=polish_ahead)
 
-    packing, sized = run(shape, backend, strategy, counts=counts, mode="fast", iterations=iterations,
+    packing, sized = run(packed, backend, strategy, counts=counts, mode="fast", iterations=iterations,
                          restarts=restarts, seed=seed, n=len(radii), radius_range=(0.0, np.inf), fill=None,
                          time_budget=time_budget, progress=progress, on_invalid=on_invalid, on_round=on_round,
-                         params=params)
+                         params=params, centers_in=shape if centers_only else None)
     # Given up for want of room (radii not reached by a time limit or an interrupt are not counted).
     packing.params["unplaced"] = int(len(sized.unplaced))
     packing.params["unplaced_largest"] = float(sized.unplaced.max()) if len(sized.unplaced) else None
@@ -730,17 +843,20 @@ def pack_sizes(
 
 
 def run(shape, backend, strategy, *, counts, mode, iterations, restarts, seed, n, radius_range, fill, time_budget,
-        progress, on_invalid, on_round, params):
+        progress, on_invalid, on_round, params, centers_in=None):
     """One packing run of a driver whose parameters are checked: places the prototypes, runs
     the rounds of ``strategy(state)`` (a round strategy of :mod:`ndpack.rounds`, made over
     the run's :class:`RunState`) until a limit, and returns the packing, verified in float64,
     and the strategy (what it kept of the run). ``radius_range`` is ``(min_radius,
-    max_radius)``; ``params`` are recorded in the packing."""
+    max_radius)``; ``params`` are recorded in the packing. With ``centers_in`` (the user's shape,
+    ``shape`` being it grown by the largest radius: :func:`_centers_only`) only the spheres whose
+    centres lie in it count and are returned, verified by their centres."""
     started = time.perf_counter()
     steps, polish_steps = schedules(mode, int(iterations))
     deadline = None if time_budget is None else started + time_budget
     state = RunState(shape, backend, counts, steps, polish_steps, int(restarts), run_key(np.random.default_rng(seed)),
-                     deadline, time_budget)
+                     deadline, time_budget, centers_in)
+    shape = shape if centers_in is None else centers_in
     volume = shape.volume()
     if not volume.value > 0:
         raise ShapeError(
@@ -760,10 +876,11 @@ def run(shape, backend, strategy, *, counts, mode, iterations, restarts, seed, n
     finally:
         bar.close()
     table = np.array(stats, dtype=np.float64).reshape(-1, 3)  # seconds, count, fill
+    inside = state.inside[: state.count]
     packing = Packing(
-        centers=state.centers[: state.count].copy(),
-        radii=state.radii[: state.count].copy(),
-        rounds=state.rounds[: state.count].copy(),
+        centers=state.centers[: state.count][inside],
+        radii=state.radii[: state.count][inside],
+        rounds=state.rounds[: state.count][inside],
         volume=volume.value,
         volume_error=volume.error,
         stats=RoundStats(table[:, 0], table[:, 1].astype(np.int64), table[:, 2]),
@@ -812,28 +929,29 @@ def _run_rounds(state, strategy, n, radius_range, fill, volume, started, stats, 
     min_radius, max_radius = radius_range
     covered = 0.0
     while True:
-        if state.count >= n:
+        if state.inside_count >= n:
             return "count"
         if fill is not None and covered / volume >= fill:
             return "fill"
         if state.out_of_time():
             return "time"
-        centers, radii = strategy.choose(state, min_radius, n - state.count, max_radius)
+        cap = min(max_radius, state.radius_cap)
+        centers, radii = strategy.choose(state, min_radius, n - state.inside_count, cap)
         if len(radii) == 0 and state.revive():
-            centers, radii = strategy.choose(state, min_radius, n - state.count, max_radius)
+            centers, radii = strategy.choose(state, min_radius, n - state.inside_count, cap)
         if len(radii) == 0:
             if state.out_of_time():  # a revival cut short proves nothing about room
                 return "time"
             return "min_radius" if min_radius > 0 else "no_room"
-        state.insert(centers, radii, len(stats))
-        covered += float(ball_volume(state.dim, radii).sum())
-        if state.count < n:  # nothing to prepare for a round that will not come
-            strategy.after_round(state, centers, radii, n - state.count)
-        stats.append((time.perf_counter() - started, state.count, covered / volume))
-        bar.update(len(radii))
+        inside = state.insert(centers, radii, len(stats))
+        covered += float(ball_volume(state.dim, radii[inside]).sum())
+        if state.inside_count < n:  # nothing to prepare for a round that will not come
+            strategy.after_round(state, centers, radii, n - state.inside_count)
+        stats.append((time.perf_counter() - started, state.inside_count, covered / volume))
+        bar.update(int(inside.sum()))
         bar.set_postfix(fill=f"{covered / volume:.4f}", refresh=False)
-        if on_round is not None and on_round(Round(len(stats) - 1, centers, radii, state.count, covered / volume,
-                                                   stats[-1][0], state)):
+        if on_round is not None and on_round(Round(len(stats) - 1, centers[inside], radii[inside], state.inside_count,
+                                                   covered / volume, stats[-1][0], state)):
             return "callback"
 
 

@@ -91,7 +91,7 @@ def _snug(state, centers, clearance, radii, max_radius):
         return centers, radii
     centers, radii = centers.copy(), radii.copy()
     centers[moved] = state.snug(centers[moved], clearance[moved], radii[moved])
-    keep = disjoint_greedy(centers, radii, state.margin)
+    keep = disjoint_greedy(centers, radii, state.margin, state.period)
     return centers[keep], radii[keep]
 
 
@@ -134,11 +134,8 @@ class Faithful:
         _, clearance, centers = self.leaders(state, min(self.batch, room), max_radius)
         radii, usable = _usable(state, clearance, min_radius, max_radius)
         centers, radii = _snug(state, centers[usable], clearance[usable], radii[usable], max_radius)
-        chosen = []
-        for i in range(len(radii)):
-            # Same-round candidates know nothing of each other: keep those clear of the ones kept.
-            if all(np.linalg.norm(centers[i] - centers[j]) >= radii[i] + radii[j] + state.margin for j in chosen):
-                chosen.append(i)
+        # Same-round candidates know nothing of each other: keep those clear of the ones kept.
+        chosen = disjoint_greedy(centers, radii, state.margin, state.period)
         return centers[chosen], radii[chosen]
 
     def after_round(self, state, centers, radii, room):
@@ -203,13 +200,13 @@ class Fast:
             polished = polished | full
             radii, usable = _usable(state, clearance, min_radius, max_radius)
             usable = _tightest_first(usable, clearance, full)
-            chosen = usable[disjoint_greedy(points[usable], radii[usable], state.margin)[:room]]
+            chosen = usable[disjoint_greedy(points[usable], radii[usable], state.margin, state.period)[:room]]
             waiting = ids[chosen[~polished[chosen]]]
             if len(waiting) == 0:
                 break
             if passes >= POLISH_PASSES:
                 ready = usable[polished[usable]]
-                chosen = ready[disjoint_greedy(points[ready], radii[ready], state.margin)[:room]]
+                chosen = ready[disjoint_greedy(points[ready], radii[ready], state.margin, state.period)[:room]]
                 if len(chosen):
                     break
             state.polish(np.sort(waiting))
@@ -261,7 +258,7 @@ class Fast:
             if len(ids) == 0:
                 break
             new = store.split_cells(ids, state.wall_slack)
-            store.tighten_reach(np.concatenate([ids, new]), *state.spheres)
+            store.tighten_reach(np.concatenate([ids, new]), *state.obstacles)
             made.append(new)
             total += len(ids)
         # The touched first (their first points are theirs), then the new ones from their centres.
@@ -305,7 +302,7 @@ class Sized(Fast):
             head = self.pending[0]
             size = min(room, int(np.searchsorted(-self.pending, -(1 - self.band) * head, side="right")))
             wanted = self.pending[:size]
-            centers, fits = Fast.choose(self, state, wanted[-1], size, head)
+            centers, fits = Fast.choose(self, state, min(wanted[-1], max_radius), size, min(head, max_radius))
             if len(fits) == 0:
                 # No room for the largest left: give up every radius above the largest clearance.
                 top = state.prototypes.top()
@@ -318,6 +315,14 @@ class Sized(Fast):
             self.pending = np.concatenate([wanted[~taken], self.pending[size:]])
             return centers[placed], radii[placed]
         return np.empty((0, state.dim)), np.empty(0)
+
+    def after_round(self, state, centers, radii, room):
+        # Centres only: a sphere whose centre came out past the walls does not count; its radius
+        # goes back to the list (the sphere stays, an obstacle, as in a larger bed cut by centre).
+        returned = radii[~state.inside[state.count - len(radii) : state.count]]
+        if len(returned):
+            self.pending = np.sort(np.concatenate([self.pending, returned]))[::-1]
+        super().after_round(state, centers, radii, room)
 
 
 def _assign(wanted, fits):

@@ -21,6 +21,7 @@ from scipy.spatial import cKDTree
 
 from .errors import DimensionError, NdpackError, ParameterError
 from .oracle import as_points
+from .period import period_of
 
 #: Default tolerance, as a fraction of the shape's scale: float64 rounding of distances is about
 #: 1e-16 of it, and the driver keeps a margin of 1e-10 (ndpack.protosphere.SAFETY_MARGIN).
@@ -43,7 +44,8 @@ class Verification:
     tol : float
         Absolute tolerance used.
     worst_containment : float
-        Largest ``distance(center) + radius``: how far the worst sphere pokes out (< 0: inside).
+        Largest ``distance(center) + radius``: how far the worst sphere pokes out (< 0: inside);
+        ``distance(center)`` where only the centres were checked.
     worst_overlap : float
         Largest ``r_i + r_j - |c_i - c_j|`` over near pairs (< 0: the tightest pair's gap).
     outside : (k,) int64
@@ -52,6 +54,8 @@ class Verification:
         Pairs that overlap by more than ``tol``.
     samples_outside : (k,) int64 or None
         Spheres with a point outside by the independent check (None where it did not run).
+    centers_only : bool
+        Whether only the centres had to lie inside.
     """
 
     ok: bool
@@ -62,6 +66,7 @@ class Verification:
     outside: np.ndarray = field(repr=False)
     overlapping: np.ndarray = field(repr=False)
     samples_outside: np.ndarray | None = field(default=None, repr=False)
+    centers_only: bool = False
 
     def __bool__(self) -> bool:
         return self.ok
@@ -72,8 +77,9 @@ class Verification:
         if self.samples_outside is not None:
             independent = (f"; independent check: {len(self.samples_outside)} spheres with points outside by the "
                            f"exact winding number ({SAMPLES_PER_SPHERE} points each)")
+        where = " (centres only)" if self.centers_only else ""
         return (
-            f"{verdict}: {self.count} spheres, {len(self.outside)} outside, "
+            f"{verdict}: {self.count} spheres, {len(self.outside)} outside{where}, "
             f"{len(self.overlapping)} overlapping pairs (worst poke-out {self.worst_containment:.3g}, "
             f"worst overlap {self.worst_overlap:.3g}, tolerance {self.tol:.3g}){independent}"
         )
@@ -86,7 +92,7 @@ class Verification:
             raise NdpackError(f"packing is invalid: {self.summary()}")
 
 
-def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0):
+def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0, period=None):
     """Pairs of spheres that overlap by more than ``tol``, and the worst overlap.
 
     Parameters
@@ -94,6 +100,9 @@ def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0):
     centers : (n, d) float64
     radii : (n,) float64, positive
     tol : float
+    period : Period, optional
+        A periodic domain (:class:`~ndpack.period.Period`): spheres overlap where any images of
+        them do, and a sphere wider than a period overlaps its own image (a pair ``(i, i)``).
 
     Returns
     -------
@@ -102,13 +111,21 @@ def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0):
     worst : float
         Largest ``r_i + r_j - |c_i - c_j|`` among the near pairs examined; ``-inf`` if none.
     """
-    if len(radii) < 2:
+    if len(radii) < 2 and period is None:
         return np.zeros((0, 2), dtype=np.int64), -np.inf
+    # In a periodic domain the trees wrap: one frame for all of them (ndpack.period).
+    points, boxsize = centers, None
+    if period is not None:
+        points, boxsize = period.frame(centers, 2 * radii.max() + tol)
     octave = np.floor(np.log2(radii)).astype(np.int64)
     firsts, seconds = [], []
+    if period is not None:  # a sphere wider than a period meets its own image, a period away
+        wide = np.flatnonzero(2 * radii - period.shortest > tol)
+        firsts.append(wide)
+        seconds.append(wide)
     for level in np.unique(octave):
         members = np.flatnonzero(octave == level)
-        tree = cKDTree(centers[members])
+        tree = cKDTree(points[members], boxsize=boxsize)
         largest = radii[members].max()
         # Pairs within one octave come back as one array (no Python list per sphere: twice as
         # fast as querying them as below, 100,000 spheres); each pair across octaves is found
@@ -120,7 +137,7 @@ def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0):
         if len(queries) == 0:
             continue
         found = tree.query_ball_point(
-            centers[queries], radii[queries] + largest + tol, return_sorted=False, workers=-1
+            points[queries], radii[queries] + largest + tol, return_sorted=False, workers=-1
         )
         lengths = np.fromiter(map(len, found), dtype=np.int64, count=len(found))
         # One flat pass over the lists: several times faster than an array per list.
@@ -130,13 +147,18 @@ def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0):
     first, second = np.concatenate(firsts), np.concatenate(seconds)
     if len(first) == 0:
         return np.zeros((0, 2), dtype=np.int64), -np.inf
-    overlap = radii[first] + radii[second] - np.linalg.norm(centers[first] - centers[second], axis=1)
+    delta = centers[first] - centers[second]
+    if period is not None:
+        delta = period.difference(centers[first], centers[second])
+        delta[first == second, np.argmin(period.lengths)] = period.shortest  # the nearest own image
+    overlap = radii[first] + radii[second] - np.linalg.norm(delta, axis=1)
     bad = overlap > tol
     pairs = np.sort(np.stack([first[bad], second[bad]], axis=1), axis=1)
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))], float(overlap.max())
 
 
-def verify(packing, shape=None, tol: float | None = None, radii=None, independent: bool = False) -> Verification:
+def verify(packing, shape=None, tol: float | None = None, radii=None, independent: bool = False,
+           centers_only: bool | None = None) -> Verification:
     """Check a packing in float64: every sphere inside ``shape``, no two overlapping.
 
     Parameters
@@ -155,6 +177,9 @@ def verify(packing, shape=None, tol: float | None = None, radii=None, independen
         summed in NumPy (:meth:`~ndpack.TriangleMesh.exact_winding_number`), which shares no code
         with the oracle's distance or sign: a point counts as outside where it is not above 1/2.
         Costs points x triangles.
+    centers_only : bool, optional
+        Check only that the centres lie inside (a packing made with ``centers_only=True``);
+        default: what the packing records (``params["centers_only"]``), else False.
 
     Returns
     -------
@@ -164,6 +189,8 @@ def verify(packing, shape=None, tol: float | None = None, radii=None, independen
     if radii is None:
         centers, radii = packing.centers, packing.radii
         shape = packing.shape if shape is None else shape
+        if centers_only is None:
+            centers_only = bool((getattr(packing, "params", None) or {}).get("centers_only", False))
     else:
         centers = packing
     if shape is None:
@@ -185,9 +212,9 @@ def verify(packing, shape=None, tol: float | None = None, radii=None, independen
     if len(radii) == 0:
         return Verification(True, 0, tol, -np.inf, -np.inf, np.zeros(0, np.int64), np.zeros((0, 2), np.int64))
     samples_outside = _independent_check(shape, centers, radii, tol) if independent else None
-    poke_out = shape._distance(centers) + radii
+    poke_out = shape._distance(centers) + (0.0 if centers_only else radii)
     outside = np.flatnonzero(~(poke_out <= tol))  # NaN counts as outside
-    pairs, worst_overlap = overlapping_pairs(centers, radii, tol)
+    pairs, worst_overlap = overlapping_pairs(centers, radii, tol, period_of(shape))
     return Verification(
         ok=len(outside) == 0 and len(pairs) == 0 and (samples_outside is None or len(samples_outside) == 0),
         count=len(radii),
@@ -197,6 +224,7 @@ def verify(packing, shape=None, tol: float | None = None, radii=None, independen
         outside=outside,
         overlapping=pairs,
         samples_outside=samples_outside,
+        centers_only=bool(centers_only),
     )
 
 

@@ -90,6 +90,8 @@ def test_a_polygon_and_a_4d_box():
     outline = nd.Polygon([[0, 0], [1, 0], [1, 0.6], [0.5, 1.0], [0, 0.6]])
     classes = SizeDistribution.discrete([0.03, 0.015, 0.008], [0.3, 0.3, 0.4], by="count")
     check(nd.pack_sizes(outline, classes, n=400, backend="numba"), classes)
+    sand = SizeDistribution.lognormal(0.004, 0.25, by="mass")
+    assert check(nd.pack_sizes(outline, sand, n=10_000, backend="numba"), sand).solid_fraction > 0.5
     lognormal = SizeDistribution.lognormal(0.08, 0.2, by="count")
     box = nd.Box(np.zeros(4), np.ones(4))
     check(nd.pack_sizes(box, lognormal, n=600, backend="numba", grid=8), lognormal)

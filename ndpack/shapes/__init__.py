@@ -14,6 +14,7 @@ from .csg import (
 )
 from .plugin import Function, plugin
 from .mesh import TriangleMesh
+from .periodic import Periodic
 from .polygon import Polygon
 from .scalar import ScalarFunction, scalar_plugin
 from .primitives import (
@@ -32,7 +33,7 @@ from .primitives import (
 
 __all__ = [
     "Ball", "Box", "Capsule", "Complement", "ConvexPolytope", "Cylinder", "Difference",
-    "Ellipsoid", "Function", "HalfSpace", "Intersection", "Offset", "Polygon", "Rotate",
+    "Ellipsoid", "Function", "HalfSpace", "Intersection", "Offset", "Periodic", "Polygon", "Rotate",
     "RoundedBox", "Scale", "ScalarFunction", "Shell", "Simplex", "Slab", "SmoothUnion", "Torus",
     "Translate", "TriangleMesh", "Union", "plugin", "scalar_plugin",
 ]
