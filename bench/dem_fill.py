@@ -47,14 +47,6 @@ def curve(packing):
     return [[round(float(seconds[i]), 4), round(float(fill[i]), 5)] for i in keep]
 
 
-def row(case, backend, packing, seconds, **extra):
-    result = dict(case=case, backend=backend, seconds=round(seconds, 3), count=len(packing),
-                  solid_fraction=round(packing.fill, 5), valid=bool(packing.verify().ok), **extra,
-                  curve=curve(packing))
-    print({key: value for key, value in result.items() if key != "curve"}, flush=True)
-    return result
-
-
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--backends", nargs="+", default=["numba"])
@@ -70,6 +62,23 @@ def main():
     }
     grains = nd.SizeDistribution.lognormal(0.06, 0.25, by="mass")
     rows = []
+    versions = {"ndpack": nd.__version__, "numpy": np.__version__, "python": platform.python_version()}
+    for module in ("numba", "warp"):
+        try:
+            versions[module] = __import__(module).__version__
+        except ImportError:
+            pass
+
+    def row(case, backend, packing, seconds, **extra):
+        """One result, printed and (with ``--out``) written at once: a run cut short keeps the rows so far."""
+        rows.append(dict(case=case, backend=backend, seconds=round(seconds, 3), count=len(packing),
+                         solid_fraction=round(packing.fill, 5), valid=bool(packing.verify().ok), **extra,
+                         curve=curve(packing)))
+        print({key: value for key, value in rows[-1].items() if key != "curve"}, flush=True)
+        if args.out:
+            with open(args.out, "w") as file:
+                json.dump({"versions": versions, "machine": platform.node(), "rows": rows}, file, indent=1)
+
     for backend in args.backends:
         device = args.device if backend in ("warp", "numba-cuda") else None
         options = dict(backend=backend, device=device, progress=False)
@@ -80,35 +89,26 @@ def main():
             for shape, label in ((box, f"unit {name}"), (nd.Periodic(box), f"periodic unit {name}")):
                 packing, seconds = timed(lambda: nd.pack(shape, n=10**7, min_radius=radius, max_radius=radius,
                                                          mode="fast", **options))
-                rows.append(row(f"equal spheres, {label}, r = {radius}", backend, packing, seconds))
+                row(f"equal spheres, {label}, r = {radius}", backend, packing, seconds)
         for name, distribution in distributions.items():
             for fraction in args.fractions:
                 packing, seconds = timed(lambda: nd.pack_sizes(cylinder, distribution, solid_fraction=fraction,
                                                                **options))
                 report = distribution.report(packing)
-                rows.append(row(name, backend, packing, seconds, target=fraction, ks=round(report.ks, 5),
-                                unplaced=packing.params["unplaced"]))
+                row(name, backend, packing, seconds, target=fraction, ks=round(report.ks, 5),
+                    unplaced=packing.params["unplaced"])
             greedy, seconds = timed(lambda: nd.pack(cylinder, n=len(packing), mode="fast", **options))
-            rows.append(row(f"greedy driver (pack, fast), cylinder, as many spheres as {name} at "
-                            f"{args.fractions[-1]}", backend, greedy, seconds))
+            row(f"greedy driver (pack, fast), cylinder, as many spheres as {name} at {args.fractions[-1]}",
+                backend, greedy, seconds)
         cell = nd.Periodic(nd.Box(np.zeros(4), np.ones(4)))
         nd.pack_sizes(cell, grains, n=200, grid=8, **options)  # the 4-D kernels' warm-up
         experiment, seconds = timed(lambda: nd.pack_sizes(cell, grains, solid_fraction=0.4, grid=8, **options))
-        rows.append(row("log-normal median 0.06, sigma 0.25, by mass, periodic 4-D unit cell, solid fraction 0.4", backend, experiment,
-                        seconds, ks=round(grains.report(experiment).ks, 5), unplaced=experiment.params["unplaced"]))
+        row("log-normal median 0.06, sigma 0.25, by mass, periodic 4-D unit cell, solid fraction 0.4", backend,
+            experiment, seconds, ks=round(grains.report(experiment).ks, 5), unplaced=experiment.params["unplaced"])
         if args.figure and backend == args.backends[0]:
             from ndpack.plot import save_fill_figure
 
             save_fill_figure(experiment, args.figure, labels=["4-D periodic, log-normal by mass"])
-    if args.out:
-        versions = {"ndpack": nd.__version__, "numpy": np.__version__, "python": platform.python_version()}
-        for module in ("numba", "warp"):
-            try:
-                versions[module] = __import__(module).__version__
-            except ImportError:
-                pass
-        with open(args.out, "w") as file:
-            json.dump({"versions": versions, "machine": platform.node(), "rows": rows}, file, indent=1)
 
 
 if __name__ == "__main__":
