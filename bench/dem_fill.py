@@ -42,7 +42,7 @@ def timed(make):
 
 def curve(packing):
     """(seconds, fill) after each round, thinned to at most ``CURVE_POINTS`` (the last kept)."""
-    seconds, fill = np.asarray(packing.stats.seconds), np.asarray(packing.stats.fill)
+    seconds, fill = np.asarray(packing.stats.time), np.asarray(packing.stats.fill)
     keep = np.unique(np.linspace(0, len(fill) - 1, min(len(fill), CURVE_POINTS)).astype(int)) if len(fill) else []
     return [[round(float(seconds[i]), 4), round(float(fill[i]), 5)] for i in keep]
 
