@@ -82,7 +82,12 @@ def main():
     for backend in args.backends:
         device = args.device if backend in ("warp", "numba-cuda") else None
         options = dict(backend=backend, device=device, progress=False)
-        nd.pack(nd.Box([0, 0, 0], [1, 1, 1]), n=20, mode="fast", max_radius=0.1, **options)  # warm-up
+        for dim in (2, 3):  # warm-up: the 2-D and 3-D kernels, compiled or loaded apart from the timings
+            unit = nd.Box(np.zeros(dim), np.ones(dim))
+            for shape in (unit, nd.Periodic(unit)):
+                nd.pack(shape, n=20, mode="fast", min_radius=0.1, max_radius=0.1, **options)
+        nd.pack_sizes(cylinder, distributions[next(iter(distributions))], n=50, **options)
+        nd.pack(cylinder, n=50, mode="fast", **options)
         for dim, radius in ((2, 0.01), (3, 0.025)):
             box = nd.Box(np.zeros(dim), np.ones(dim))
             name = "square" if dim == 2 else "cube"
