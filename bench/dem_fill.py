@@ -86,7 +86,7 @@ def main():
             unit = nd.Box(np.zeros(dim), np.ones(dim))
             for shape in (unit, nd.Periodic(unit)):
                 nd.pack(shape, n=20, mode="fast", min_radius=0.1, max_radius=0.1, **options)
-        nd.pack_sizes(cylinder, distributions[next(iter(distributions))], n=50, **options)
+        nd.pack_sizes(cylinder, list(distributions.values())[0], n=50, **options)
         nd.pack(cylinder, n=50, mode="fast", **options)
         for dim, radius in ((2, 0.01), (3, 0.025)):
             box = nd.Box(np.zeros(dim), np.ones(dim))

@@ -92,7 +92,7 @@ SNUG_STEPS, SNUG_TOLERANCE = 8, 1e-9
 WALL_SLACK = 10.0
 #: In a periodic domain the images of a round's spheres are kept as obstacles where they come
 #: within this many times the round's largest radius of the cell (and no sphere after it is
-#: larger: :attr:`RunState.radius_cap`). The greedy radii only shrink, so twice leaves room for
+#: larger: :attr:`RunState.image_reach`). The greedy radii only shrink, so twice leaves room for
 #: the late finds of the fast mode; the images kept cost a layer of that width along each face.
 IMAGE_REACH = 2.0
 
@@ -240,7 +240,8 @@ class RunState:
         self.inside = np.empty(64, dtype=bool)
         self.inside_count = 0
         # A periodic domain (ndpack.Periodic): the spheres' images near the cell are obstacles too
-        # (ndpack.period), kept within ``image_reach`` of it, which is also the largest radius allowed.
+        # (ndpack.period), kept within ``image_reach`` of it, which is also the largest radius allowed
+        # (infinite without a period; below half the shortest period with one: IMAGE_REACH).
         self.period = period_of(shape)
         self.image_reach = np.inf
         self._obstacles = None  # (centres, radii, count) of the spheres and their images, when periodic
@@ -379,12 +380,6 @@ class RunState:
             return self.spheres
         centers, radii, count = self._obstacles
         return centers[:count], radii[:count]
-
-    @property
-    def radius_cap(self) -> float:
-        """The largest radius a sphere may have now: infinite, but in a periodic domain the reach
-        of the images kept (:data:`IMAGE_REACH`; below half the shortest period)."""
-        return self.image_reach
 
     def with_images(self, centers, radii):
         """Spheres ``centers`` (k, d), ``radii`` (k,) and, in a periodic domain, their images
@@ -935,7 +930,7 @@ def _run_rounds(state, strategy, n, radius_range, fill, volume, started, stats, 
             return "fill"
         if state.out_of_time():
             return "time"
-        cap = min(max_radius, state.radius_cap)
+        cap = min(max_radius, state.image_reach)  # a periodic domain's images reach only so far
         centers, radii = strategy.choose(state, min_radius, n - state.inside_count, cap)
         if len(radii) == 0 and state.revive():
             centers, radii = strategy.choose(state, min_radius, n - state.inside_count, cap)
