@@ -25,11 +25,14 @@ import ndpack.backends  # noqa: E402
 import ndpack.formats  # noqa: E402
 import ndpack.plot  # noqa: E402
 import ndpack.render  # noqa: E402
+import ndpack.sphere_tree  # noqa: E402
+import ndpack.robots  # noqa: E402
 
 #: The top-level names by topic, in this order; a name of ``ndpack.__all__`` missing here goes
 #: to "Other", so that nothing public is left out.
 TOPICS = {
     "Packing": ["pack", "Packing", "RoundStats", "verify", "Verification"],
+    "Coverings (collision spheres)": ["cover", "Covering", "CoverReport", "check_covering"],
     "The oracle protocol": ["Oracle", "Volume", "ball_volume"],
     "Shapes": ["Ball", "Box", "RoundedBox", "HalfSpace", "Slab", "Capsule", "Cylinder", "ConvexPolytope",
                "Simplex", "Ellipsoid", "Torus", "Polygon", "TriangleMesh", "rotation"],
@@ -40,7 +43,7 @@ TOPICS = {
                             "ParameterError", "BackendError", "KernelError", "MeshWarning"],
 }
 BACKEND_FUNCTIONS = ["available", "use", "get_backend", "names"]
-MODULES = [ndpack.formats, ndpack.render, ndpack.plot]
+MODULES = [ndpack.formats, ndpack.render, ndpack.plot, ndpack.sphere_tree, ndpack.robots]
 
 
 class _Text:

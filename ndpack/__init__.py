@@ -25,6 +25,7 @@ from .errors import (
     RepairWarning,
     ShapeError,
 )
+from .covering import CoverReport, Covering, check_covering, cover
 from .oracle import Oracle, Volume, ball_volume
 from .packing import Packing, RoundStats
 from .protosphere import Round, pack, pack_sizes
@@ -39,5 +40,5 @@ __version__ = "0.1.0"
 __all__ = [
     "BackendError", "BoundsError", "KernelError", "DimensionError", "GridWarning", "InvalidPackingError", "MeshWarning", "NdpackError", "OracleError", "Oracle",
     "Packing", "ParameterError", "RepairWarning", "Round", "RoundStats", "ShapeError", "Verification", "Volume",
-    "ball_volume", "pack", "pack_sizes", "SizeDistribution", "SizeReport", "rotation", "verify", *_shape_names,
+    "ball_volume", "check_covering", "cover", "Covering", "CoverReport", "pack", "pack_sizes", "SizeDistribution", "SizeReport", "rotation", "verify", *_shape_names,
 ]

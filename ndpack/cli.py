@@ -1,7 +1,8 @@
-"""The ``ndpack`` command line: ``pack``, ``verify``, ``render``, ``info`` and ``backends``.
+"""The ``ndpack`` command line: ``pack``, ``cover``, ``verify``, ``render``, ``info`` and ``backends``.
 
 Every mistake in the input ends in one line on stderr and a non-zero exit: 2 for bad input,
-1 for a packing that fails verification, 130 for an interrupted run (after saving what it made).
+1 for a packing that fails verification (or a covering that leaves samples or links uncovered),
+130 for an interrupted run (after saving what it made).
 """
 
 from __future__ import annotations
@@ -34,6 +35,27 @@ written is refused before packing; a save that fails later (a full disk) keeps t
 .npz beside it, in the current folder or in the temporary folder, and the error says where.
 
 output formats (by suffix, or --format):
+{formats}
+"""
+
+COVER_EXAMPLES = """examples:
+  ndpack cover part.obj -n 32 -o part.sph                # at most 32 spheres, protruding as little as can be
+  ndpack cover part.obj --protrusion 0.01 -o part.json   # out by at most 1% of the bounding-box diagonal
+  ndpack cover part.stl --protrusion-abs 0.002 -o part.yml --option link=gripper   # cuRobo YAML, 2 mm out
+  ndpack cover box:dim=3 -n 8                            # any shape `ndpack pack` takes; report only
+  ndpack cover robot.urdf -n 32 -o robot_spheres/        # each link of a robot: URDF, cuRobo YAML, report
+  ndpack cover robot.urdf --protrusion 0.02 -o out/ --package my_robot=$HOME/ws/src/my_robot
+
+The spheres' union covers the shape (checked on fresh samples of its boundary and inside), and
+each sphere reaches outside it by at most the protrusion. SHAPE is what `ndpack pack` takes (a
+built-in name[:key=value,...], a mesh file, a .py script, module:function) or a .urdf file.
+For a URDF, -o names a folder; it receives <robot>_spheres.urdf (each covered link's collision
+elements replaced by its spheres, in the link's frame), <robot>_spheres.yml (cuRobo's
+collision_spheres) and report.json; -n and --protrusion then apply to each link on its own, and
+a link whose mesh is missing or broken is reported and keeps its collision elements.
+exit status: 0 all covered, 1 some samples (or links) not covered, 2 bad input.
+
+output formats (by suffix, or --format; .yml and .yaml are cuRobo YAML):
 {formats}
 """
 
@@ -131,8 +153,38 @@ HOLES_REUSE = "; default: what the packing records"
 HOLE_CHOICES = ("cap", "refuse")
 
 
+def _positive_int(text: str) -> int:
+    if not text.strip().isdigit() or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return int(text)
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
+    return value
+
+
+def _share(text: str) -> float:
+    """``--protrusion``: a share of the diagonal, 0 < share < 1 (``1%`` is accepted too)."""
+    percent = text.strip().endswith("%")
+    try:
+        value = float(text.strip().rstrip("%")) / (100 if percent else 1)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and 0 < value < 1):
+        raise argparse.ArgumentTypeError(f"expected a share of the diagonal between 0 and 1 (0.01 or 1%), got "
+                                         f"{text!r}; --protrusion-abs takes a length")
+    return value
+
+
 def _parser() -> argparse.ArgumentParser:
     from .builtin import BUILTIN
+    from .covering import CHECK_SAMPLES, DEFAULT_SAMPLES
     from .formats import table
 
     parser = argparse.ArgumentParser(
@@ -179,6 +231,35 @@ def _parser() -> argparse.ArgumentParser:
                       help="should the final float64 check fail: repair (shrink or drop the spheres, and "
                       "say so; the default) or raise (exit 2, nothing saved)")
     pack.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+
+    cover = commands.add_parser("cover", help="cover a shape, or each link of a robot (URDF), with spheres",
+                                formatter_class=raw, epilog=COVER_EXAMPLES.format(formats=table()))
+    cover.add_argument("shape", help="built-in spec, mesh file, .py script, module:function, or a .urdf file")
+    cover.add_argument("--dim", type=int, help="dimension of a built-in shape (same as :dim=)")
+    cover.add_argument("--holes", choices=HOLE_CHOICES, help=HOLES_HELP + " (for a URDF: its meshes)")
+    how = cover.add_mutually_exclusive_group(required=True)
+    how.add_argument("-n", "--count", type=_positive_int, help="at most this many spheres (per link for a URDF)")
+    how.add_argument("--protrusion", type=_share, metavar="SHARE",
+                     help="how far a sphere may reach outside the shape, as a SHARE of the shape's bounding-box "
+                     "diagonal (of each link's, for a URDF): 0.01 is 1%%")
+    how.add_argument("--protrusion-abs", type=_positive_float, metavar="LENGTH",
+                     help="the same as a length, in the shape's units (metres for a URDF)")
+    cover.add_argument("-o", "--output",
+                       help="write the spheres here (the suffix picks the format); for a URDF, the output folder")
+    cover.add_argument("--format", help="the output format where the suffix does not say (e.g. curobo for .json)")
+    cover.add_argument("--option", action="append", default=[], metavar="KEY=VALUE", type=_option,
+                       help="a format option, repeatable: link=gripper, subdivisions=2 (see below)")
+    cover.add_argument("--package", action="append", default=[], metavar="NAME=FOLDER", type=_option,
+                       help="a URDF: the folder of ROS package NAME, for package://NAME/... mesh names the search "
+                       "does not find (repeatable)")
+    cover.add_argument("--samples", type=_positive_int, default=DEFAULT_SAMPLES,
+                       help=f"boundary samples the cover is made on (default {DEFAULT_SAMPLES})")
+    cover.add_argument("--check-samples", type=_positive_int, default=CHECK_SAMPLES,
+                       help=f"fresh boundary samples of the final check (default {CHECK_SAMPLES})")
+    cover.add_argument("--seed", type=_seed, default=0, help="random seed, an integer >= 0 (default 0)")
+    cover.add_argument("--backend", help="backend of the packing that finds the medial axis (default: the fastest)")
+    cover.add_argument("--device", help="cpu or cuda:N, for warp and numba-cuda")
+    cover.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
 
     verify = commands.add_parser("verify", help="re-check a saved packing against its shape", formatter_class=raw,
                                  epilog=VERIFY_EXAMPLES)
@@ -328,6 +409,68 @@ def _save_or_keep(packing, path: str, format: str | None, options: dict) -> Path
             raise NdpackError(f"{reason}; the packing was kept in {kept}") from error
         raise NdpackError(f"{reason}; and no folder could keep the packing (beside it, here, or the "
                           f"temporary folder)") from error
+
+
+# ---------------------------------------------------------------------------------------- cover
+def _cover(args) -> int:
+    if Path(args.shape).suffix.lower() == ".urdf" or args.shape.lower().endswith(".urdf.xacro"):
+        return _cover_robot(args)
+    if args.package:
+        raise ParameterError("--package applies to a URDF's meshes, and the shape is not a .urdf file: leave it out")
+    from .covering import cover
+    from .sources import load_shape
+
+    source = args.shape
+    if args.dim is not None:
+        source += ("," if ":" in source else ":") + f"dim={args.dim}"
+    shape = load_shape(source, args.holes)
+    options = dict(args.option)
+    if args.output:
+        _check_output(args.output, args.format, shape.dim, options)
+    elif options or args.format:
+        raise ParameterError("--format and --option describe the output file: give it with -o PATH")
+    protrusion = args.protrusion_abs
+    if args.protrusion is not None:
+        protrusion = args.protrusion * float(math.dist(*shape.bounds))
+    started = time.perf_counter()
+    covering = cover(shape, n=args.count, protrusion=protrusion, samples=args.samples,
+                     check_samples=args.check_samples, seed=args.seed, backend=args.backend, device=args.device,
+                     progress=not args.quiet and sys.stderr.isatty())
+    elapsed = time.perf_counter() - started
+    print(f"shape:    {args.shape} -> {shape!r}")
+    asked = (f"at most {args.count}" if args.count is not None
+             else f"protrusion at most {protrusion:.4g}" + (f" ({args.protrusion:.2%} of the diagonal)"
+                                                            if args.protrusion is not None else ""))
+    print(f"spheres:  {len(covering)} ({asked})")
+    print(f"covering: {covering.report.summary()}")
+    print(f"time:     {elapsed:.2f} s")
+    if args.output:
+        print(f"saved:    {_save_or_keep(covering.as_packing(), args.output, args.format, options)}")
+    return 0 if covering.report.covered else 1
+
+
+def _cover_robot(args) -> int:
+    from .robots import cover_urdf
+
+    if args.format or args.option:
+        raise ParameterError("--format and --option apply to one shape's file; a URDF's spheres go to a folder "
+                             "(-o DIR): a URDF, a cuRobo .yml and report.json")
+    if args.dim is not None:
+        raise ParameterError("--dim applies to a built-in shape, not to a URDF: leave it out")
+    if not args.output:
+        raise ParameterError("give the output folder with -o DIR: a URDF's spheres are written as "
+                             "<robot>_spheres.urdf, <robot>_spheres.yml and report.json")
+    packages = {name: str(folder) for name, folder in args.package}
+    started = time.perf_counter()
+    robot = cover_urdf(args.shape, args.output, n=args.count, protrusion=args.protrusion_abs,
+                       protrusion_share=args.protrusion, packages=packages or None, holes=args.holes,
+                       seed=args.seed, progress=not args.quiet and sys.stderr.isatty(), samples=args.samples,
+                       check_samples=args.check_samples, backend=args.backend, device=args.device)
+    elapsed = time.perf_counter() - started
+    print(robot.summary())
+    print(f"time:     {elapsed:.2f} s")
+    print(f"saved:    {robot.urdf}, {robot.yaml}, {robot.report}")
+    return 0 if robot.covered else 1
 
 
 # ------------------------------------------------------------------------- saved packings
@@ -511,7 +654,7 @@ def _backends(args) -> int:
     return 0 if any(s.startswith("ok") for s in status.values()) else 1
 
 
-COMMANDS = {"pack": _pack, "verify": _verify, "render": _render, "info": _info, "backends": _backends}
+COMMANDS = {"pack": _pack, "cover": _cover, "verify": _verify, "render": _render, "info": _info, "backends": _backends}
 
 
 #: Options whose value is a list of numbers, which may start with a minus sign.

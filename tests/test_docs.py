@@ -23,7 +23,7 @@ MESHES = ROOT / "tests" / "data" / "meshes"
 MESH_FILES = {"cow.obj": "cow.ply", "armadillo.obj": "armadillo-20k.ply", "fandisk.obj": "fandisk.ply"}
 
 #: Pages whose snippets must run.
-PAGES = ["quickstart.md", "guide.md", "plugins.md", "formats.md", "backends.md", "meshes.md", "dem.md"]
+PAGES = ["quickstart.md", "guide.md", "plugins.md", "formats.md", "backends.md", "meshes.md", "dem.md", "collision.md"]
 
 MAX_SPHERES = 150
 SKIP_MARK = "<!-- not run -->"
@@ -44,6 +44,21 @@ def _small_pack(shape, n=1000, **options):
 
 
 ndpack.pack = _small_pack
+
+_cover = ndpack.cover
+
+
+@functools.wraps(_cover)
+def _small_cover(shape, *args, **options):  # coverings on fewer samples (their tests use more)
+    options.setdefault("samples", 2000)
+    options.setdefault("check_samples", 4000)
+    return _cover(shape, *args, **options)
+
+
+ndpack.cover = _small_cover
+
+import ndpack.sphere_tree
+ndpack.sphere_tree.covering_tree = functools.partial(ndpack.sphere_tree.covering_tree, samples=2000)
 """
 
 

@@ -1,0 +1,125 @@
+"""Points against a union of balls: how far outside it each point is, and which ball serves it best.
+
+A covering is judged by these queries on tens of thousands of samples against up to thousands of
+balls. Every pair is visited (a Numba loop, parallel over points), which is exact and fast
+enough here: 100,000 points against 1,000 balls take about 0.1 s on 2 cores. A k-d tree of the
+centres does not help, as the balls' radii differ by orders of magnitude.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+
+
+def gaps(points, centers, radii) -> np.ndarray:
+    """How far each point lies outside the union of the balls (negative: inside).
+
+    Parameters
+    ----------
+    points : (n, d) float64
+    centers : (m, d) float64
+    radii : (m,) float64
+
+    Returns
+    -------
+    (n,) float64
+        ``min_j |p - c_j| - r_j``; ``inf`` where there are no balls.
+    """
+    points, centers, radii = _arrays(points, centers, radii)
+    out = np.empty(len(points))
+    _kernels()[0](points, centers, radii, out)
+    return out
+
+
+def best_balls(points, centers, radii, clearances) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """For each point: its gap, the covering ball that reaches least outside the shape, and the
+    ball that would reach least outside the shape if grown to cover it.
+
+    A ball of centre ``c`` whose clearance (distance to the shape's boundary) is ``d`` reaches at
+    most ``|p - c| - d`` outside the shape when its radius is ``|p - c|``: that is the cost
+    ranked here.
+
+    Parameters
+    ----------
+    points : (n, d) float64
+    centers : (m, d) float64
+    radii, clearances : (m,) float64
+
+    Returns
+    -------
+    gap : (n,) float64
+        As :func:`gaps`.
+    covering : (n,) int64
+        The ball covering the point with the least cost, -1 where none covers it.
+    cheapest : (n,) int64
+        The ball of least cost among all.
+    cost : (n,) float64
+        That least cost.
+    """
+    points, centers, radii = _arrays(points, centers, radii)
+    clearances = np.ascontiguousarray(clearances, dtype=np.float64)
+    n = len(points)
+    gap, cost = np.empty(n), np.empty(n)
+    covering, cheapest = np.empty(n, np.int64), np.empty(n, np.int64)
+    _kernels()[1](points, centers, radii, clearances, gap, covering, cheapest, cost)
+    return gap, covering, cheapest, cost
+
+
+def _arrays(points, centers, radii):
+    return (np.ascontiguousarray(points, dtype=np.float64), np.ascontiguousarray(centers, dtype=np.float64),
+            np.ascontiguousarray(radii, dtype=np.float64))
+
+
+@functools.cache
+def _kernels():
+    import numba
+
+    global prange
+    prange = numba.prange
+    return (numba.njit(parallel=True, cache=True)(_gaps),
+            numba.njit(parallel=True, cache=True)(_best_balls))
+
+
+prange = range  # replaced by numba.prange when the kernels are compiled
+
+
+def _gaps(points, centers, radii, out):
+    for i in prange(points.shape[0]):
+        best = math.inf
+        for j in range(centers.shape[0]):
+            length2 = 0.0
+            for k in range(points.shape[1]):
+                t = points[i, k] - centers[j, k]
+                length2 += t * t
+            gap = math.sqrt(length2) - radii[j]
+            if gap < best:
+                best = gap
+        out[i] = best
+
+
+def _best_balls(points, centers, radii, clearances, gap_out, covering_out, cheapest_out, cost_out):
+    for i in prange(points.shape[0]):
+        best_gap = math.inf
+        covering, covering_cost = -1, math.inf
+        cheapest, cheapest_cost = -1, math.inf
+        for j in range(centers.shape[0]):
+            length2 = 0.0
+            for k in range(points.shape[1]):
+                t = points[i, k] - centers[j, k]
+                length2 += t * t
+            length = math.sqrt(length2)
+            gap = length - radii[j]
+            cost = length - clearances[j]
+            if gap < best_gap:
+                best_gap = gap
+            if cost < cheapest_cost:
+                cheapest, cheapest_cost = j, cost
+            if gap <= 0.0 and cost < covering_cost:
+                covering, covering_cost = j, cost
+        gap_out[i] = best_gap
+        covering_out[i] = covering
+        cheapest_out[i] = cheapest
+        cost_out[i] = cheapest_cost

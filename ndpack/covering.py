@@ -1,0 +1,762 @@
+"""Coverings: spheres whose union holds a shape and reaches at most a given distance outside it.
+
+Collision checkers (robot motion planners, physics engines) stand a part in for a few dozen
+spheres that must *cover* it, so that no contact is missed, and protrude as little as possible.
+A packing's spheres are inside the part and cover only part of it; a covering's spheres hold
+all of it.
+
+How a covering is made
+----------------------
+A ball of centre ``c`` whose clearance (distance to the boundary, ``-f(c)``) is ``d`` and whose
+radius is ``d + t`` reaches at most ``t`` outside the shape: the ball of radius ``d`` is inside,
+and every point of the larger ball is within ``t`` of it. This holds for every conservative
+oracle (a lower bound of the distance only makes ``d`` smaller). A covering that protrudes at most
+``t`` is therefore a set cover of the shape by such balls, and it is made on samples:
+
+1. Candidate centres: the medial-axis sample of a packing's first round (ProtoSphere's converged
+   prototypes) and, for a share of the boundary samples, the centre of the largest inscribed
+   ball touching there (the shrinking-ball method, a bisection along the inward normal).
+2. Samples of the boundary and of the inside (:mod:`ndpack.boundary`) make the set to cover.
+3. A greedy set cover (within a factor ``ln n`` of the fewest balls) picks balls of radius
+   ``d + t``; balls it made redundant are dropped. Samples no candidate reaches get a ball of
+   their own.
+4. Local refinement: each ball shrinks to the samples it serves best (the fewest reaching out),
+   plus half the samples' spacing, which lowers the mean protrusion.
+5. Gaps between samples: fresh samples are drawn; each one found outside the union is served by
+   growing the ball that then reaches out least (within ``t``), or by a new ball, until a fresh
+   set is covered (at most :data:`FIX_PASSES` sets).
+
+Given a count instead of a tolerance, the smallest ``t`` whose cover needs at most that many balls
+is found by bisection (on fewer samples where the balls are large), and step 5 grows balls
+without limit, so the count holds and the protrusion is what it takes.
+
+Coverage is checked, not proven: :func:`check_covering` counts fresh boundary and interior
+samples outside the union, and reports the protrusion bound and the volume covered outside.
+"""
+
+from __future__ import annotations
+
+import itertools
+import heapq
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial import cKDTree
+from tqdm.auto import tqdm
+
+from . import ball_union
+from .boundary import boundary_samples, interior_samples
+from .errors import ParameterError
+from .oracle import Oracle, check_packable
+
+#: Boundary samples the cover is made on (the inside gets a quarter as many more).
+DEFAULT_SAMPLES = 20_000
+#: Fresh boundary samples of the final check (the inside gets a quarter as many more).
+CHECK_SAMPLES = 50_000
+#: Boundary samples whose shrinking ball becomes a candidate centre, at most.
+SHRINKING_BALLS = 8_000
+#: Bisection steps of a shrinking ball (its radius to 2^-18 of the largest clearance).
+SHRINK_STEPS = 18
+#: Sets of fresh samples drawn to close the gaps between samples, at most (two in a row must be
+#: covered).
+FIX_PASSES = 12
+#: Fresh samples of each such set, as a multiple of ``samples``.
+FIX_SHARE = 3
+#: Boundary samples of the largest such set.
+FIX_LARGEST = 400_000
+#: Entries of the candidates' coverage sets held at once; more and the samples are thinned.
+SET_BUDGET = 2_000_000
+#: Share of the tolerance kept for the seams between samples: the cover is made for the rest,
+#: and every radius then grows by it, so that the points near a covered sample are covered too.
+SEAM_SHARE = 0.25
+#: Points drawn around each sample a fix pass finds outside the union (the gap is nearby).
+AROUND = 8
+#: Rounds of moving each ball to the centre that covers its samples reaching out least (counts).
+RECENTRE_STEPS = 12
+#: Samples of a ball's region its new centre is chosen on (the farthest among them).
+REGION_SAMPLES = 256
+#: Candidate centres a ball may move to in one round, at most (a random share of those near it).
+RECENTRE_CANDIDATES = 1000
+#: Samples and candidates per ball the bisection of a count works on, at most.
+SEARCH_POINTS_PER_BALL = 200
+SEARCH_CANDIDATES_PER_BALL = 60
+#: Relative spread of the protrusion bisection at which a count's search stops.
+SEARCH_PRECISION = 0.02
+#: A sample this far outside the union (relative to the shape's scale) still counts as covered:
+#: float64 rounding of the distances.
+GAP_TOLERANCE = 1e-9
+
+
+@dataclass
+class CoverReport:
+    """How well spheres cover a shape, checked in float64 against its oracle on fresh samples.
+
+    Attributes
+    ----------
+    boundary_samples, interior_samples : int
+        Samples drawn on the boundary and inside.
+    boundary_covered, interior_covered : float
+        The fraction of each inside the union of the spheres (up to :attr:`gap_tolerance`).
+    worst_gap : float
+        The farthest any sample lies outside the union (<= 0 when every one is inside).
+    gap_tolerance : float
+        Rounding allowed: samples at most this far outside count as covered.
+    max_protrusion, mean_protrusion : float
+        Over the spheres, of ``r + f(c)``: a bound of how far each reaches outside the shape, exact
+        for a convex shape's spheres (valid for centres inside, or where the oracle is exact
+        outside). 0 for a sphere inside.
+    diagonal : float
+        The shape's bounding-box diagonal, the unit of the relative figures.
+    outside_volume, outside_volume_error : float
+        Volume of the union outside the shape (Monte Carlo over the union's bounds) and its
+        standard error.
+    shape_volume : float
+    """
+
+    boundary_samples: int
+    interior_samples: int
+    boundary_covered: float
+    interior_covered: float
+    worst_gap: float
+    gap_tolerance: float
+    max_protrusion: float
+    mean_protrusion: float
+    diagonal: float
+    outside_volume: float
+    outside_volume_error: float
+    shape_volume: float
+
+    @property
+    def covered(self) -> bool:
+        """Every sample, on the boundary and inside, is in the union."""
+        return self.worst_gap <= self.gap_tolerance
+
+    @property
+    def outside_ratio(self) -> float:
+        """Volume covered outside the shape over the shape's volume."""
+        return self.outside_volume / self.shape_volume
+
+    def summary(self) -> str:
+        covered = "all covered" if self.covered else (
+            f"NOT COVERED: {1 - self.boundary_covered:.2%} of boundary and {1 - self.interior_covered:.2%} of "
+            f"interior samples outside (worst by {self.worst_gap:.3g})")
+        return (f"{covered} ({self.boundary_samples} boundary, {self.interior_samples} interior samples); "
+                f"protrusion max {self.max_protrusion:.4g} ({self.max_protrusion / self.diagonal:.2%} of the "
+                f"diagonal), mean {self.mean_protrusion:.4g}; volume outside {self.outside_ratio:.1%} of the shape's")
+
+
+@dataclass
+class Covering:
+    """Spheres whose union covers a shape (see :func:`cover`).
+
+    Attributes
+    ----------
+    centers : (n, d) float64
+    radii : (n,) float64
+    protrusion : (n,) float64
+        Each sphere's bound of how far it reaches outside the shape, ``r + f(c)`` (0 if inside).
+    report : CoverReport
+        The check on fresh samples.
+    params : dict
+        The run's parameters: ``n`` or ``protrusion`` as asked, ``tolerance`` (the protrusion the
+        cover was made for), samples, seed, candidates, passes and seconds.
+    shape : Oracle
+    """
+
+    centers: np.ndarray
+    radii: np.ndarray
+    protrusion: np.ndarray
+    report: CoverReport
+    params: dict = field(default_factory=dict)
+    shape: object = field(default=None, repr=False, compare=False)
+
+    @property
+    def dim(self) -> int:
+        return self.centers.shape[1]
+
+    def __len__(self) -> int:
+        return len(self.radii)
+
+    def summary(self) -> str:
+        return f"{len(self)} spheres in {self.dim}-D covering {self.shape!r}: {self.report.summary()}"
+
+    def __repr__(self) -> str:
+        return f"<Covering {self.summary()}>"
+
+    def as_packing(self):
+        """The spheres as a :class:`~ndpack.Packing` (to save in any sphere format); its
+        ``params["covering"]`` holds this run's parameters. Its spheres overlap and reach out of
+        the shape, so :meth:`Packing.verify` fails on it: check it with :func:`check_covering`."""
+        from .packing import Packing
+
+        volume = self.report.shape_volume
+        return Packing(self.centers.copy(), self.radii.copy(), np.zeros(len(self), np.int64), volume,
+                       params={"covering": dict(self.params)}, stop_reason="covered", shape=self.shape)
+
+    def save(self, path, format: str | None = None, **options) -> Path:
+        """Write the spheres in any of :func:`ndpack.formats.table`'s formats (``.sph`` as a 2-level
+        tree, ``format="curobo"`` as one link's ``collision_spheres``); returns the path.
+        For a hierarchy, save :meth:`tree`."""
+        from .formats import save
+
+        return save(self.as_packing(), path, format, **options)
+
+    def tree(self, branching: int = 8, depth: int = 3, seed: int = 0):
+        """A sphere-tree over this covering's shape whose deepest level has at most
+        ``branching ** (depth - 1)`` spheres; see :func:`ndpack.sphere_tree.covering_tree`."""
+        from .sphere_tree import covering_tree
+
+        return covering_tree(self.shape, branching=branching, depth=depth, seed=seed)
+
+
+# ------------------------------------------------------------------------------------------------ driver
+def cover(
+    shape: Oracle,
+    n: int | None = None,
+    protrusion: float | None = None,
+    *,
+    samples: int = DEFAULT_SAMPLES,
+    check_samples: int = CHECK_SAMPLES,
+    packing=None,
+    seed: int = 0,
+    backend=None,
+    device=None,
+    progress: bool | None = None,
+) -> Covering:
+    """Spheres whose union covers ``shape``, each reaching at most a given distance outside it.
+
+    Parameters
+    ----------
+    shape : Oracle
+        Any bounded ndpack shape, of any dimension: a mesh, CSG, a polygon, a plug-in.
+    n : int, optional
+        At most this many spheres, protruding as little as that allows.
+    protrusion : float, optional
+        No sphere reaches farther than this outside the shape (a length; for example
+        ``0.01 * diagonal``), with as few spheres as the greedy cover finds. Give ``n`` or
+        ``protrusion``, not both.
+    samples : int
+        Boundary samples the cover is made on (and a quarter as many inside); more samples
+        leave fewer gaps for the fresh samples to close.
+    check_samples : int
+        Fresh boundary samples of the final check (:attr:`Covering.report`).
+    packing : Packing, optional
+        A packing of this shape whose medial-axis sample (and spheres) seed the candidates;
+        default: one round of the fast mode is run for it.
+    seed : int
+        Seed of every random sample; equal seeds give equal coverings.
+    backend, device :
+        Run the packing that finds the medial-axis sample on this backend (see :func:`ndpack.pack`).
+    progress : bool, optional
+        Show a progress bar; by default only when stderr is a terminal.
+
+    Returns
+    -------
+    Covering
+        Its ``report`` says whether fresh samples are all covered, and the protrusion.
+    """
+    from .shapes.adapters import as_oracle
+
+    started = time.perf_counter()
+    shape = as_oracle(shape)
+    check_packable(shape)
+    _check_request(n, protrusion, samples, check_samples)
+    show = sys.stderr.isatty() if progress is None else progress
+    bar = tqdm(total=3, desc="covering", disable=not show, dynamic_ncols=True)
+    problem = Problem.make(shape, samples, packing, seed, backend, device)
+    bar.update()
+    # The cover is made for a share of the tolerance; the rest (the seam) is added to every
+    # radius at the end, so that the neighbourhood of every covered sample is covered too.
+    everything = np.arange(len(problem.points))
+    if protrusion is not None:
+        tolerance = float(protrusion)
+        inner, limit = (1 - SEAM_SHARE) * tolerance, tolerance
+        sub_points, sub_ids = _thin(problem.points, problem.candidates, problem.clearances, inner, problem.rng)
+        chosen = sub_ids[_cover_at(sub_points, problem.candidates[sub_ids], problem.clearances[sub_ids], inner)]
+        centers, clearance = problem.candidates[chosen], problem.clearances[chosen]
+        centers, radii, clearance = problem.serve(everything, centers, clearance + tolerance, clearance, inner, limit,
+                                                  tolerance - inner)
+        radii, keep = _refine(problem.points, centers, radii, clearance, tolerance - inner)
+        centers, radii, clearance = centers[keep], radii[keep], clearance[keep]
+    else:
+        centers, radii, clearance, inner = problem.cover_count(everything, int(n))
+        tolerance, limit = inner + 0.5 * problem.spacing, None
+    bar.update()
+    centers, radii, clearance, passes = problem.close_gaps(centers, radii, clearance, inner, limit, tolerance - inner)
+    bar.update()
+    bar.close()
+    report = check_covering(shape, centers, radii, samples=check_samples, seed=seed + 1)
+    params = {"n": None if n is None else int(n), "protrusion": None if protrusion is None else float(protrusion),
+              "tolerance": tolerance, "samples": int(samples), "seed": int(seed),
+              "candidates": len(problem.candidates), "passes": passes, "seconds": time.perf_counter() - started}
+    return Covering(centers, radii, _protrusions(shape, centers, radii), report, params, shape)
+
+
+class Problem:
+    """What a covering is made on: samples of a shape and candidate centres.
+
+    Attributes
+    ----------
+    shape : Oracle
+    points : (m, d) float64
+        Boundary samples, then interior samples.
+    normals : (m, d) float64
+        Outward normals at the boundary samples, zero rows for the interior ones.
+    candidates : (c, d) float64
+        Candidate centres, inside the shape.
+    clearances : (c,) float64
+        Their distances to the boundary.
+    spacing : float
+        The boundary samples' median distance to their nearest neighbour.
+    samples : int
+        Boundary samples drawn (fresh sets are multiples of it).
+    rng : numpy.random.Generator
+    """
+
+    def __init__(self, shape, points, normals, candidates, clearances, samples, rng):
+        self.shape, self.points, self.normals = shape, points, normals
+        self.candidates, self.clearances = candidates, clearances
+        self.spacing = _spacing(points[np.any(normals != 0, axis=1)])
+        self.samples, self.rng = samples, rng
+        self.diagonal = float(np.linalg.norm(np.ptp(shape.bounds, axis=0)))
+        self._tree = cKDTree(candidates)
+
+    @classmethod
+    def make(cls, shape, samples, packing=None, seed=0, backend=None, device=None) -> Problem:
+        from .protosphere import pack
+
+        rng = np.random.default_rng(seed)
+        if packing is None:
+            packing = pack(shape, n=1, mode="fast", seed=seed, backend=backend, device=device, progress=False)
+        boundary, normals = boundary_samples(shape, samples, rng)
+        inside = interior_samples(shape, max(samples // 4, 1), rng)
+        candidates, clearances = _candidates(shape, packing, boundary, normals, rng)
+        return cls(shape, np.vstack([boundary, inside]), np.vstack([normals, np.zeros_like(inside)]), candidates,
+                   clearances, samples, rng)
+
+    def fresh(self, count):
+        """New samples: ``count`` on the boundary and a quarter as many inside; (points, normals)."""
+        boundary, normals = boundary_samples(self.shape, count, self.rng)
+        inside = interior_samples(self.shape, max(count // 4, 1), self.rng)
+        return np.vstack([boundary, inside]), np.vstack([normals, np.zeros_like(inside)])
+
+    def near(self, ids):
+        """Candidate ids whose centre lies within the bounding ball of the points ``ids``."""
+        region = self.points[ids]
+        middle = region.mean(axis=0)
+        span = float(np.linalg.norm(region - middle, axis=1).max())
+        near = np.asarray(self._tree.query_ball_point(middle, span), dtype=np.int64)
+        if not len(near):
+            near = np.asarray([self._tree.query(middle)[1]], dtype=np.int64)
+        return near
+
+    def cover_count(self, ids, k):
+        """At most ``k`` balls covering the points ``ids``, reaching out as little as found: the
+        bisection on the tolerance, :func:`_recentre`, then growth to cover every point and the
+        shrink to the points served. Returns centres, radii, clearances and the tolerance."""
+        points = self.points[ids]
+        near = self.near(ids) if len(ids) < len(self.points) else np.arange(len(self.candidates))
+        candidates, clearances = self.candidates[near], self.clearances[near]
+        inner, chosen = _search_count(points, candidates, clearances, k, self.diagonal, self.rng)
+        centers, clearance, inner = _recentre(points, candidates[chosen], clearances[chosen], candidates, clearances,
+                                              self.rng)
+        seam = 0.5 * self.spacing
+        centers, radii, clearance = self.serve(ids, centers, clearance + inner + seam, clearance, inner, None, seam)
+        radii, keep = _refine(points, centers, radii, clearance, seam)
+        return centers[keep], radii[keep], clearance[keep], inner
+
+    def serve(self, ids, centers, radii, clearance, inner, limit, seam, points=None, normals=None):
+        """:func:`_serve` for the points ``ids`` (or the given ``points`` and ``normals``)."""
+        if points is None:
+            points, normals = self.points[ids], self.normals[ids]
+        return _serve(self.shape, points, normals, centers, radii, clearance, inner, limit, seam,
+                      (self.candidates, self.clearances))
+
+    def close_gaps(self, centers, radii, clearance, inner, limit, seam):
+        """Fresh sample sets, each twice as large as the last (up to :data:`FIX_LARGEST`), until
+        two in a row are covered, or :data:`FIX_PASSES` sets: each point outside the union, and points drawn around it, are
+        served. Returns the centres, radii, clearances and the sets drawn."""
+        passes, clean, size = 0, 0, FIX_SHARE * self.samples
+        while passes < FIX_PASSES and clean < 2:
+            passes += 1
+            fresh, normals = self.fresh(size)
+            missed = ball_union.gaps(fresh, centers, radii) > 0
+            size = min(2 * size, FIX_LARGEST)  # the gaps left are ever smaller: look harder
+            if not missed.any():
+                clean += 1
+                continue
+            clean = 0
+            on_boundary = np.any(normals != 0, axis=1)
+            near, near_normals = _around(self.shape, fresh[missed & on_boundary], fresh[missed & ~on_boundary],
+                                         self.spacing, self.rng)
+            centers, radii, clearance = self.serve(None, centers, radii, clearance, inner, limit, seam, near,
+                                                   near_normals)
+        return centers, radii, clearance, passes
+
+
+def _check_request(n, protrusion, samples, check_samples):
+    if (n is None) == (protrusion is None):
+        raise ParameterError("give either n (the most spheres) or protrusion (how far a sphere may reach "
+                             "outside the shape), not both and not neither")
+    if n is not None and (isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1):
+        raise ParameterError(f"n must be a positive integer, got {n!r}")
+    if protrusion is not None and not (isinstance(protrusion, (int, float, np.floating)) and protrusion > 0
+                                       and math.isfinite(protrusion)):
+        raise ParameterError(f"protrusion must be a positive length, got {protrusion!r}; for a share of the shape's "
+                             "size, multiply by its bounding-box diagonal")
+    for name, value in (("samples", samples), ("check_samples", check_samples)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 100:
+            raise ParameterError(f"{name} must be an integer of at least 100, got {value!r}")
+
+
+# ------------------------------------------------------------------------------------------------ candidates
+def _candidates(shape, packing, boundary, normals, rng):
+    """Candidate centres, (m, d), and their clearances (m,), all strictly inside the shape."""
+    medial = [np.asarray(packing.medial_axis, dtype=np.float64).reshape(-1, shape.dim),
+              np.asarray(packing.centers, dtype=np.float64).reshape(-1, shape.dim)]
+    reach = float(np.max(packing.medial_radii, initial=0.0))
+    if not reach > 0:
+        reach = 0.5 * float(np.ptp(shape.bounds, axis=0).max())
+    count = min(len(boundary), SHRINKING_BALLS)
+    which = rng.choice(len(boundary), size=count, replace=False)
+    centers = np.vstack([*medial, _shrinking_balls(shape, boundary[which], normals[which], 1.05 * reach)])
+    clearances = -shape._distance(centers)
+    inside = clearances > 0
+    return np.ascontiguousarray(centers[inside]), clearances[inside]
+
+
+def _shrinking_balls(shape, points, normals, reach):
+    """Centres of the largest balls inside ``shape`` that touch its boundary at ``points``.
+
+    A bisection on the radius ``t``: the ball of centre ``p - t n`` is inside while its clearance
+    is at least ``t``. (n, d) float64.
+    """
+    low, high = np.zeros(len(points)), np.full(len(points), reach)
+    slack = 1e-9 * shape.scale
+    for _ in range(SHRINK_STEPS):
+        middle = 0.5 * (low + high)
+        fits = -shape._distance(points - middle[:, None] * normals) >= middle * (1 - 1e-6) - slack
+        low, high = np.where(fits, middle, low), np.where(fits, high, middle)
+    return points - low[:, None] * normals
+
+
+def _spacing(points) -> float:
+    """The median distance between a sample and its nearest neighbour."""
+    if len(points) < 2:
+        return 0.0
+    distances, _ = cKDTree(points).query(points, k=2)
+    return float(np.median(distances[:, 1]))
+
+
+# ------------------------------------------------------------------------------------------------ set cover
+def _coverage_sets(points, centers, radii, tree=None):
+    """Which points each ball holds, as CSR (pointers (m + 1,), indices)."""
+    tree = cKDTree(points) if tree is None else tree
+    lists = tree.query_ball_point(centers, radii, return_sorted=False)
+    lengths = np.fromiter(map(len, lists), dtype=np.int64, count=len(lists))
+    pointers = np.zeros(len(lists) + 1, dtype=np.int64)
+    np.cumsum(lengths, out=pointers[1:])
+    indices = np.fromiter(itertools.chain.from_iterable(lists), dtype=np.int64, count=int(pointers[-1]))
+    return pointers, indices
+
+
+def _greedy(pointers, indices, count, covered=None) -> list[int]:
+    """Greedy set cover: repeatedly the set holding the most points not yet covered.
+
+    Lazy: a set's gain only falls, so a popped set whose fresh gain still tops the heap is the
+    best. ``covered`` (count,) bool is updated in place.
+    """
+    covered = np.zeros(count, dtype=bool) if covered is None else covered
+    heap = [(-int(size), i) for i, size in enumerate(np.diff(pointers)) if size]
+    heapq.heapify(heap)
+    chosen, left = [], count - int(covered.sum())
+    while left and heap:
+        _, i = heapq.heappop(heap)
+        members = indices[pointers[i]:pointers[i + 1]]
+        gain = int(np.count_nonzero(~covered[members]))
+        if not gain:
+            continue
+        if heap and gain < -heap[0][0]:
+            heapq.heappush(heap, (-gain, i))
+            continue
+        chosen.append(i)
+        covered[members] = True
+        left -= gain
+    return chosen
+
+
+def _prune(chosen, pointers, indices, count) -> list[int]:
+    """Drop chosen sets whose every point another chosen set also holds (smallest first)."""
+    times = np.zeros(count, dtype=np.int64)
+    for i in chosen:
+        times[indices[pointers[i]:pointers[i + 1]]] += 1
+    kept = []
+    for i in sorted(chosen, key=lambda i: pointers[i + 1] - pointers[i]):
+        members = indices[pointers[i]:pointers[i + 1]]
+        if members.size and times[members].min() >= 2:
+            times[members] -= 1
+        else:
+            kept.append(i)
+    return kept
+
+
+def _cover_at(points, candidates, clearances, tolerance, tree=None) -> np.ndarray:
+    """Indices of candidates whose balls of radius ``clearance + tolerance`` cover what they can
+    of ``points``."""
+    pointers, indices = _coverage_sets(points, candidates, clearances + tolerance, tree)
+    chosen = _greedy(pointers, indices, len(points))
+    return np.asarray(_prune(chosen, pointers, indices, len(points)), dtype=np.int64)
+
+
+def _search_count(points, candidates, clearances, n, diagonal, rng):
+    """The least tolerance (to :data:`SEARCH_PRECISION`) whose cover has at most ``n`` balls, and
+    that cover's candidate indices. Where the balls are large, the sets are thinned to
+    :data:`SET_BUDGET` entries: fewer samples and candidates, chosen at random."""
+    # A few balls need few samples and candidates to be placed: thin both (recentring refines).
+    keep = max(SEARCH_POINTS_PER_BALL * n, 3000)
+    if len(points) > keep:
+        points = points[rng.choice(len(points), size=keep, replace=False)]
+    ids = np.arange(len(candidates))
+    keep = max(SEARCH_CANDIDATES_PER_BALL * n, 1500)
+    if len(ids) > keep:
+        ids = np.sort(rng.choice(ids, size=keep, replace=False))
+    candidates, clearances = candidates[ids], clearances[ids]
+    low, high = 0.0, None
+    tolerance = 0.05 * diagonal
+    best = None
+    for _ in range(40):
+        sub_points, sub_ids = _thin(points, candidates, clearances, tolerance, rng)
+        chosen = sub_ids[_cover_at(sub_points, candidates[sub_ids], clearances[sub_ids], tolerance)]
+        missed = _missed(sub_points, candidates[chosen], clearances[chosen] + tolerance)
+        if len(chosen) + missed <= n:
+            high, best = tolerance, chosen
+        else:
+            low = tolerance
+        if high is None:
+            tolerance *= 4
+        elif low == 0.0:
+            tolerance /= 4
+        elif high / low - 1 <= SEARCH_PRECISION:
+            break
+        else:
+            tolerance = math.sqrt(low * high)
+    return high, ids[best]
+
+
+def _recentre(points, centers, clearance, candidates, clearances, rng):
+    """Lloyd-like rounds that lower the largest protrusion of a covering by a fixed count of balls.
+
+    Each point goes to the ball that covers it reaching out least (``|p - c| - d``), then each
+    ball moves to the candidate centre near its points whose ball covering them all reaches out
+    least. Returns the best centres, their clearances and that protrusion.
+    """
+    tree = cKDTree(candidates)
+    best = (np.inf, centers, clearance)
+    for _ in range(RECENTRE_STEPS):
+        _, _, owner, cost = ball_union.best_balls(points, centers, np.zeros(len(centers)), clearance)
+        worst = float(cost.max())
+        if worst >= best[0] * (1 - 1e-3):
+            break
+        best = (worst, centers, clearance)
+        centers, clearance = centers.copy(), clearance.copy()
+        order = np.argsort(owner, kind="stable")
+        bounds = np.searchsorted(owner[order], np.arange(len(centers) + 1))
+        for j in range(len(centers)):
+            region = points[order[bounds[j]:bounds[j + 1]]]
+            if not len(region):
+                continue
+            if len(region) > REGION_SAMPLES:  # the farthest points decide; keep them and a random rest
+                far = np.argsort(np.linalg.norm(region - centers[j], axis=1))[-REGION_SAMPLES // 4:]
+                region = np.vstack([region[far], region[rng.choice(len(region), REGION_SAMPLES, replace=False)]])
+            middle = region.mean(axis=0)
+            span = float(np.linalg.norm(region - middle, axis=1).max())
+            near = np.asarray(tree.query_ball_point(middle, span), dtype=np.int64)
+            if len(near) > RECENTRE_CANDIDATES:
+                near = rng.choice(near, size=RECENTRE_CANDIDATES, replace=False)
+            if not len(near):
+                continue
+            need = np.sqrt(((region[None, :, :] - candidates[near][:, None, :]) ** 2).sum(axis=2)).max(axis=1)
+            need -= clearances[near]
+            current = float(np.linalg.norm(region - centers[j], axis=1).max() - clearance[j])
+            k = int(np.argmin(need))
+            if need[k] < current:
+                centers[j], clearance[j] = candidates[near[k]], clearances[near[k]]
+    return best[1], best[2], best[0]
+
+
+def _thin(points, candidates, clearances, tolerance, rng):
+    """A random share of ``points`` and of the candidates' ids, so that their sets hold about
+    :data:`SET_BUDGET` entries."""
+    ids = np.arange(len(candidates))
+    probe = rng.choice(ids, size=min(256, len(ids)), replace=False)
+    tree = cKDTree(points)
+    mean = float(tree.query_ball_point(candidates[probe], clearances[probe] + tolerance, return_length=True).mean())
+    total = mean * len(ids)
+    if total <= SET_BUDGET:
+        return points, ids
+    share = math.sqrt(SET_BUDGET / total)
+    keep_points = max(int(share * len(points)), min(len(points), 2000))
+    keep_ids = max(int(share * len(ids)), min(len(ids), 1000))
+    return (points[rng.choice(len(points), size=keep_points, replace=False)],
+            np.sort(rng.choice(ids, size=keep_ids, replace=False)))
+
+
+def _missed(points, centers, radii) -> int:
+    if not len(centers):
+        return len(points)
+    return int(np.count_nonzero(ball_union.gaps(points, centers, radii) > 0))
+
+
+# ------------------------------------------------------------------------------------------------ refinement
+def _serve(shape, points, normals, centers, radii, clearance, inner, limit, seam, pool):
+    """Cover the ``points`` that lie outside the union.
+
+    Each grows the ball that would then reach out least, to its distance plus ``seam``, where that
+    ball would reach out at most ``inner`` (or always, for ``limit`` None), within ``limit``;
+    the rest get new balls from the candidates ``pool`` (centres, clearances) and fallbacks
+    beside them, chosen by the greedy cover at ``inner`` and given the radius ``clearance + limit``.
+    Returns the new ``centers``, ``radii`` and ``clearance``.
+    """
+    gap, _, cheapest, cost = ball_union.best_balls(points, centers, radii, clearance)
+    missed = gap > 0
+    if not missed.any():
+        return centers, radii, clearance
+    points, normals, cheapest, cost = points[missed], normals[missed], cheapest[missed], cost[missed]
+    grow = np.ones(len(points), dtype=bool) if limit is None else cost <= inner
+    radii = radii.copy()
+    if grow.any():
+        lengths = np.linalg.norm(points[grow] - centers[cheapest[grow]], axis=1)
+        reach = np.inf if limit is None else clearance[cheapest[grow]] + limit
+        np.maximum.at(radii, cheapest[grow], np.minimum(lengths + seam, reach))
+    rest = ~grow
+    if rest.any():
+        extra_centers, extra_clearance = _fallback_candidates(shape, points[rest], normals[rest], inner)
+        pool_centers = np.vstack([pool[0], extra_centers])
+        pool_clearance = np.concatenate([pool[1], extra_clearance])
+        chosen = _cover_at(points[rest], pool_centers, pool_clearance, inner)
+        centers = np.vstack([centers, pool_centers[chosen]])
+        clearance = np.concatenate([clearance, pool_clearance[chosen]])
+        radii = np.concatenate([radii, pool_clearance[chosen] + limit])
+    return centers, radii, clearance
+
+
+def _around(shape, boundary, inside, spread, rng):
+    """The given samples and :data:`AROUND` points near each (within about ``spread``): on the
+    boundary, projected onto it along the gradient; inside, kept where inside. Returns the points
+    (k, d) and their outward normals (zero inside)."""
+    from .boundary import PROJECTIONS
+
+    parts, normals = [boundary, inside], [np.zeros_like(boundary), np.zeros_like(inside)]
+    if len(boundary):
+        near = np.repeat(boundary, AROUND, axis=0) + spread * rng.standard_normal((AROUND * len(boundary), shape.dim))
+        for _ in range(PROJECTIONS):
+            distances, gradients = shape._distance_and_gradient(near)
+            near = near - distances[:, None] * gradients
+        distances, gradients = shape._distance_and_gradient(near)
+        on = np.abs(distances) <= 1e-9 * shape.scale
+        parts.append(near[on])
+        normals.append(gradients[on])
+        _, normals[0] = shape._distance_and_gradient(boundary)
+    if len(inside):
+        near = np.repeat(inside, AROUND, axis=0) + spread * rng.standard_normal((AROUND * len(inside), shape.dim))
+        near = near[shape._distance(near) < 0]
+        parts.append(near)
+        normals.append(np.zeros_like(near))
+    return np.vstack(parts), np.vstack(normals)
+
+
+def _fallback_candidates(shape, points, normals, tolerance):
+    """A centre per point that a ball of radius ``clearance + tolerance`` there surely covers:
+    ``tolerance`` inwards along the normal where that is inside, else the point itself."""
+    centers = points - tolerance * normals
+    clearances = -shape._distance(centers)
+    at_point = clearances < 0
+    centers[at_point] = points[at_point]
+    clearances[at_point] = np.maximum(-shape._distance(points[at_point]), 0.0)
+    return centers, clearances
+
+
+def _refine(points, centers, radii, clearance, slack):
+    """Shrink each ball to the points it serves best (those it covers reaching out least), plus
+    ``slack``; balls that serve none are dropped. Returns the radii and the kept mask."""
+    _, covering, _, _ = ball_union.best_balls(points, centers, radii, clearance)
+    served = covering >= 0
+    lengths = np.linalg.norm(points[served] - centers[covering[served]], axis=1)
+    needed = np.full(len(centers), -np.inf)
+    np.maximum.at(needed, covering[served], lengths)
+    keep = np.isfinite(needed)
+    return np.minimum(radii, needed + slack), keep
+
+
+def _protrusions(shape, centers, radii) -> np.ndarray:
+    if not len(centers):
+        return np.zeros(0)
+    return np.maximum(radii + shape._distance(centers), 0.0)
+
+
+# ------------------------------------------------------------------------------------------------ the check
+def check_covering(shape: Oracle, centers, radii, *, samples: int = CHECK_SAMPLES, volume_samples: int = 200_000,
+                   seed: int = 1) -> CoverReport:
+    """Check in float64 how well spheres cover ``shape``: fresh boundary and interior samples
+    outside their union, how far they reach outside the shape, and the volume they cover there.
+
+    Parameters
+    ----------
+    shape : Oracle
+    centers : (n, d) array_like
+    radii : (n,) array_like
+    samples : int
+        Boundary samples (and a quarter as many inside).
+    volume_samples : int
+        Monte Carlo points for the volume outside.
+    seed : int
+
+    Returns
+    -------
+    CoverReport
+    """
+    from .oracle import as_points
+    from .shapes.adapters import as_oracle
+
+    shape = as_oracle(shape)
+    centers = as_points(centers, shape.dim).reshape(-1, shape.dim)
+    radii = np.asarray(radii, dtype=np.float64).reshape(-1)
+    if radii.shape != (len(centers),) or not np.all(np.isfinite(radii)):
+        raise ParameterError(f"radii must be {len(centers)} finite numbers, one per centre; got shape {radii.shape}")
+    rng = np.random.default_rng(seed)
+    boundary, _ = boundary_samples(shape, samples, rng)
+    inside = interior_samples(shape, max(samples // 4, 1), rng)
+    tolerance = GAP_TOLERANCE * shape.scale
+    boundary_gaps = ball_union.gaps(boundary, centers, radii)
+    inside_gaps = ball_union.gaps(inside, centers, radii)
+    protrusion = _protrusions(shape, centers, radii)
+    volume = float(shape.volume().value)
+    outside, error = _outside_volume(shape, centers, radii, volume_samples, rng)
+    return CoverReport(
+        boundary_samples=len(boundary), interior_samples=len(inside),
+        boundary_covered=float(np.mean(boundary_gaps <= tolerance)),
+        interior_covered=float(np.mean(inside_gaps <= tolerance)),
+        worst_gap=float(max(boundary_gaps.max(), inside_gaps.max())), gap_tolerance=tolerance,
+        max_protrusion=float(protrusion.max(initial=0.0)), mean_protrusion=float(protrusion.mean()) if len(radii) else 0.0,
+        diagonal=float(np.linalg.norm(np.ptp(shape.bounds, axis=0))),
+        outside_volume=outside, outside_volume_error=error, shape_volume=volume)
+
+
+def _outside_volume(shape, centers, radii, count, rng):
+    """Monte Carlo volume of the union of the balls outside the shape, and its standard error."""
+    if not len(radii):
+        return 0.0, 0.0
+    lower = (centers - radii[:, None]).min(axis=0)
+    upper = (centers + radii[:, None]).max(axis=0)
+    box = float(np.prod(upper - lower))
+    points = lower + (upper - lower) * rng.random((count, shape.dim))
+    hits = (ball_union.gaps(points, centers, radii) <= 0) & (shape._distance(points) > 0)
+    share = float(hits.mean())
+    return box * share, box * math.sqrt(max(share * (1 - share), 0.25 / count ** 2) / count)
+
+
+__all__ = ["Covering", "CoverReport", "cover", "check_covering"]
