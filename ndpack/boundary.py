@@ -43,6 +43,38 @@ def boundary_samples(shape: Oracle, count: int, rng: np.random.Generator) -> tup
     return _projected_samples(shape, count, rng)
 
 
+def samples(shape: Oracle, count: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """``count`` boundary samples, then a quarter as many inside.
+
+    Returns
+    -------
+    points : (count + count // 4, d) float64
+    normals : (count + count // 4, d) float64
+        Outward normals on the boundary; zero rows for the interior points.
+    """
+    boundary, normals = boundary_samples(shape, count, rng)
+    inside = interior_samples(shape, max(count // 4, 1), rng)
+    return np.vstack([boundary, inside]), np.vstack([normals, np.zeros_like(inside)])
+
+
+def project(shape: Oracle, points) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Move ``points`` onto the boundary along the gradient (:data:`PROJECTIONS` times).
+
+    Returns
+    -------
+    points : (n, d) float64
+    normals : (n, d) float64
+        The unit gradient there.
+    on : (n,) bool
+        Which landed on the boundary (within 1e-9 of the shape's scale).
+    """
+    for _ in range(PROJECTIONS):
+        distances, gradients = shape._distance_and_gradient(points)
+        points = points - distances[:, None] * gradients
+    distances, gradients = shape._distance_and_gradient(points)
+    return points, unit_rows(gradients), np.abs(distances) <= 1e-9 * shape.scale
+
+
 def interior_samples(shape: Oracle, count: int, rng: np.random.Generator, tries: int = 200) -> np.ndarray:
     """``count`` points uniform in the inside of ``shape``, (count, d) float64 (rejection in its bounds)."""
     lower, upper = shape.bounds
@@ -60,16 +92,11 @@ def interior_samples(shape: Oracle, count: int, rng: np.random.Generator, tries:
 
 
 def _mesh_samples(vertices, faces, count, rng):
-    corners = vertices[faces]
-    first, second = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
-    cross = np.cross(first, second)
-    areas = np.linalg.norm(cross, axis=1)
-    which = rng.choice(len(faces), size=count, p=areas / areas.sum())
-    u, v = rng.random(count), rng.random(count)
-    flip = u + v > 1  # fold the parallelogram's far half back onto the triangle
-    u[flip], v[flip] = 1 - u[flip], 1 - v[flip]
-    points = corners[which, 0] + u[:, None] * first[which] + v[:, None] * second[which]
-    return points, cross[which] / areas[which, None]
+    import trimesh
+
+    mesh = trimesh.Trimesh(vertices, faces, process=False)  # ndpack's cleaned, outward-oriented triangles
+    points, which = trimesh.sample.sample_surface(mesh, count, seed=int(rng.integers(2**32)))
+    return np.asarray(points, dtype=np.float64), np.asarray(mesh.face_normals[which], dtype=np.float64)
 
 
 def _outline_samples(starts, ends, normals, count, rng):
@@ -85,17 +112,12 @@ def _projected_samples(shape, count, rng, tries: int = 400):
     band = 0.02 * float(extent.max())
     # The boundary may touch the bounds: sample a little beyond them.
     lower, upper = lower - band, upper + band
-    tolerance = 1e-9 * shape.scale
     found, total = [], 0
     for _ in range(tries):
         points = lower + (upper - lower) * rng.random((max(8 * count, 4096), shape.dim))
         points = points[np.abs(shape._distance(points)) < band]
-        for _ in range(PROJECTIONS):
-            distances, gradients = shape._distance_and_gradient(points)
-            points = points - distances[:, None] * gradients
-        distances, gradients = shape._distance_and_gradient(points)
-        on = np.abs(distances) <= tolerance
-        found.append((points[on], unit_rows(gradients[on])))
+        points, gradients, on = project(shape, points)
+        found.append((points[on], gradients[on]))
         total += int(on.sum())
         if total >= count:
             break

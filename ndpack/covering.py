@@ -49,7 +49,7 @@ from scipy.spatial import cKDTree
 from tqdm.auto import tqdm
 
 from . import ball_union
-from .boundary import boundary_samples, interior_samples
+from .boundary import project, samples as shape_samples
 from .errors import ParameterError
 from .oracle import Oracle, check_packable
 
@@ -275,8 +275,8 @@ def cover(
     if protrusion is not None:
         tolerance = float(protrusion)
         inner, limit = (1 - SEAM_SHARE) * tolerance, tolerance
-        sub_points, sub_ids = _thin(problem.points, problem.candidates, problem.clearances, inner, problem.rng)
-        chosen = sub_ids[_cover_at(sub_points, problem.candidates[sub_ids], problem.clearances[sub_ids], inner)]
+        sub_points, sub_ids, tree = _thin(problem.points, problem.candidates, problem.clearances, inner, problem.rng)
+        chosen = sub_ids[_cover_at(sub_points, problem.candidates[sub_ids], problem.clearances[sub_ids], inner, tree)]
         centers, clearance = problem.candidates[chosen], problem.clearances[chosen]
         centers, radii, clearance = problem.serve(everything, centers, clearance + tolerance, clearance, inner, limit,
                                                   tolerance - inner)
@@ -332,17 +332,13 @@ class Problem:
         rng = np.random.default_rng(seed)
         if packing is None:
             packing = pack(shape, n=1, mode="fast", seed=seed, backend=backend, device=device, progress=False)
-        boundary, normals = boundary_samples(shape, samples, rng)
-        inside = interior_samples(shape, max(samples // 4, 1), rng)
-        candidates, clearances = _candidates(shape, packing, boundary, normals, rng)
-        return cls(shape, np.vstack([boundary, inside]), np.vstack([normals, np.zeros_like(inside)]), candidates,
-                   clearances, samples, rng)
+        points, normals = shape_samples(shape, samples, rng)
+        candidates, clearances = _candidates(shape, packing, points[:samples], normals[:samples], rng)
+        return cls(shape, points, normals, candidates, clearances, samples, rng)
 
     def fresh(self, count):
         """New samples: ``count`` on the boundary and a quarter as many inside; (points, normals)."""
-        boundary, normals = boundary_samples(self.shape, count, self.rng)
-        inside = interior_samples(self.shape, max(count // 4, 1), self.rng)
-        return np.vstack([boundary, inside]), np.vstack([normals, np.zeros_like(inside)])
+        return shape_samples(self.shape, count, self.rng)
 
     def near(self, ids):
         """Candidate ids whose centre lies within the bounding ball of the points ``ids``."""
@@ -378,8 +374,9 @@ class Problem:
 
     def close_gaps(self, centers, radii, clearance, inner, limit, seam):
         """Fresh sample sets, each twice as large as the last (up to :data:`FIX_LARGEST`), until
-        two in a row are covered, or :data:`FIX_PASSES` sets: each point outside the union, and points drawn around it, are
-        served. Returns the centres, radii, clearances and the sets drawn."""
+        two in a row are covered, or :data:`FIX_PASSES` sets: each point outside the union, and
+        points drawn around it, are served. Returns the centres, radii, clearances and the sets
+        drawn."""
         passes, clean, size = 0, 0, FIX_SHARE * self.samples
         while passes < FIX_PASSES and clean < 2:
             passes += 1
@@ -525,12 +522,13 @@ def _search_count(points, candidates, clearances, n, diagonal, rng):
     if len(ids) > keep:
         ids = np.sort(rng.choice(ids, size=keep, replace=False))
     candidates, clearances = candidates[ids], clearances[ids]
+    tree = cKDTree(points)  # the same points at every step (unless thinned)
     low, high = 0.0, None
     tolerance = 0.05 * diagonal
     best = None
     for _ in range(40):
-        sub_points, sub_ids = _thin(points, candidates, clearances, tolerance, rng)
-        chosen = sub_ids[_cover_at(sub_points, candidates[sub_ids], clearances[sub_ids], tolerance)]
+        sub_points, sub_ids, sub_tree = _thin(points, candidates, clearances, tolerance, rng, tree)
+        chosen = sub_ids[_cover_at(sub_points, candidates[sub_ids], clearances[sub_ids], tolerance, sub_tree)]
         missed = _missed(sub_points, candidates[chosen], clearances[chosen] + tolerance)
         if len(chosen) + missed <= n:
             high, best = tolerance, chosen
@@ -588,21 +586,22 @@ def _recentre(points, centers, clearance, candidates, clearances, rng):
     return best[1], best[2], best[0]
 
 
-def _thin(points, candidates, clearances, tolerance, rng):
+def _thin(points, candidates, clearances, tolerance, rng, tree=None):
     """A random share of ``points`` and of the candidates' ids, so that their sets hold about
-    :data:`SET_BUDGET` entries."""
+    :data:`SET_BUDGET` entries; ``tree`` is ``points``'s k-d tree, if built. Returns the points, the
+    ids and the points' k-d tree (None where thinned)."""
+    tree = cKDTree(points) if tree is None else tree
     ids = np.arange(len(candidates))
     probe = rng.choice(ids, size=min(256, len(ids)), replace=False)
-    tree = cKDTree(points)
     mean = float(tree.query_ball_point(candidates[probe], clearances[probe] + tolerance, return_length=True).mean())
     total = mean * len(ids)
     if total <= SET_BUDGET:
-        return points, ids
+        return points, ids, tree
     share = math.sqrt(SET_BUDGET / total)
     keep_points = max(int(share * len(points)), min(len(points), 2000))
     keep_ids = max(int(share * len(ids)), min(len(ids), 1000))
     return (points[rng.choice(len(points), size=keep_points, replace=False)],
-            np.sort(rng.choice(ids, size=keep_ids, replace=False)))
+            np.sort(rng.choice(ids, size=keep_ids, replace=False)), None)
 
 
 def _missed(points, centers, radii) -> int:
@@ -648,18 +647,12 @@ def _around(shape, boundary, inside, spread, rng):
     """The given samples and :data:`AROUND` points near each (within about ``spread``): on the
     boundary, projected onto it along the gradient; inside, kept where inside. Returns the points
     (k, d) and their outward normals (zero inside)."""
-    from .boundary import PROJECTIONS
-
     parts, normals = [boundary, inside], [np.zeros_like(boundary), np.zeros_like(inside)]
     if len(boundary):
         near = np.repeat(boundary, AROUND, axis=0) + spread * rng.standard_normal((AROUND * len(boundary), shape.dim))
-        for _ in range(PROJECTIONS):
-            distances, gradients = shape._distance_and_gradient(near)
-            near = near - distances[:, None] * gradients
-        distances, gradients = shape._distance_and_gradient(near)
-        on = np.abs(distances) <= 1e-9 * shape.scale
+        near, near_normals, on = project(shape, near)
         parts.append(near[on])
-        normals.append(gradients[on])
+        normals.append(near_normals[on])
         _, normals[0] = shape._distance_and_gradient(boundary)
     if len(inside):
         near = np.repeat(inside, AROUND, axis=0) + spread * rng.standard_normal((AROUND * len(inside), shape.dim))
@@ -728,20 +721,20 @@ def check_covering(shape: Oracle, centers, radii, *, samples: int = CHECK_SAMPLE
     if radii.shape != (len(centers),) or not np.all(np.isfinite(radii)):
         raise ParameterError(f"radii must be {len(centers)} finite numbers, one per centre; got shape {radii.shape}")
     rng = np.random.default_rng(seed)
-    boundary, _ = boundary_samples(shape, samples, rng)
-    inside = interior_samples(shape, max(samples // 4, 1), rng)
+    points, _ = shape_samples(shape, samples, rng)
     tolerance = GAP_TOLERANCE * shape.scale
-    boundary_gaps = ball_union.gaps(boundary, centers, radii)
-    inside_gaps = ball_union.gaps(inside, centers, radii)
+    all_gaps = ball_union.gaps(points, centers, radii)
+    boundary_gaps, inside_gaps = all_gaps[:samples], all_gaps[samples:]
     protrusion = _protrusions(shape, centers, radii)
     volume = float(shape.volume().value)
     outside, error = _outside_volume(shape, centers, radii, volume_samples, rng)
     return CoverReport(
-        boundary_samples=len(boundary), interior_samples=len(inside),
+        boundary_samples=len(boundary_gaps), interior_samples=len(inside_gaps),
         boundary_covered=float(np.mean(boundary_gaps <= tolerance)),
         interior_covered=float(np.mean(inside_gaps <= tolerance)),
         worst_gap=float(max(boundary_gaps.max(), inside_gaps.max())), gap_tolerance=tolerance,
-        max_protrusion=float(protrusion.max(initial=0.0)), mean_protrusion=float(protrusion.mean()) if len(radii) else 0.0,
+        max_protrusion=float(protrusion.max(initial=0.0)),
+        mean_protrusion=float(protrusion.mean()) if len(radii) else 0.0,
         diagonal=float(np.linalg.norm(np.ptp(shape.bounds, axis=0))),
         outside_volume=outside, outside_volume_error=error, shape_volume=volume)
 

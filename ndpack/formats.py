@@ -22,8 +22,7 @@ names one: ``liggghts`` and ``medial`` are only chosen by name, and so is ``curo
 ``.json`` file (``.yml`` and ``.yaml`` are always cuRobo YAML). Named, ``lammps`` and
 ``liggghts`` take any file name (LAMMPS users often write ``data.bed``). :func:`load` reads
 every format but ``medial`` (read with :func:`load_medial`); a ``.json`` file is told apart by
-its content. cuRobo YAML is written by hand and read with PyYAML where it is installed, else by
-a small reader of the block mappings and lists such files use: PyYAML is not needed. The DEM
+its content. cuRobo YAML is written and read with PyYAML. The DEM
 formats (lammps, liggghts, yade) are written by :mod:`ndpack.dem_formats`.
 Files that hold only spheres load as a :class:`~ndpack.packing.Packing` whose volume is unknown
 (NaN, so its fill is NaN), whose rounds are 0, and whose params are empty.
@@ -923,15 +922,13 @@ def _write_curobo(packing: Packing, path: Path, link: str = "body") -> None:
 
 
 def curobo_yaml(links: dict, comment: str | None = None) -> str:
-    """cuRobo's collision spheres file as YAML text, written without a YAML library.
-
-    Every number is written so that it reads back as the same float64, by YAML 1.1 readers such
-    as PyYAML too (which take ``1e-05`` for a string, so it is written ``1.0e-05``)::
+    """cuRobo's collision spheres file as YAML text (PyYAML's ``safe_dump``; every number reads
+    back as the same float64)::
 
         collision_spheres:
           base_link:
-            - center: [0.1, 0.0, 0.25]
-              radius: 0.05
+          - center: [0.1, 0.0, 0.25]
+            radius: 0.05
 
     Parameters
     ----------
@@ -944,46 +941,21 @@ def curobo_yaml(links: dict, comment: str | None = None) -> str:
     -------
     str
     """
-    lines = [f"# {line}".rstrip() for line in (comment.splitlines() if comment else [])]
-    lines.append("collision_spheres:" if links else "collision_spheres: {}")
+    import yaml
+
+    document = {}
     for link, (centers, radii) in links.items():
         centers = np.asarray(centers, dtype=np.float64).reshape(-1, 3)
         radii = np.asarray(radii, dtype=np.float64).reshape(-1)
         if len(centers) != len(radii):
             raise NdpackError(f"link {link!r} has {len(centers)} centres but {len(radii)} radii")
-        if not len(radii):
-            lines.append(f"  {_yaml_key(link)}: []")
-            continue
-        lines.append(f"  {_yaml_key(link)}:")
-        for center, radius in zip(centers.tolist(), radii.tolist()):
-            lines.append(f"    - center: [{', '.join(_yaml_float(x) for x in center)}]")
-            lines.append(f"      radius: {_yaml_float(radius)}")
-    return "\n".join(lines) + "\n"
-
-
-#: Plain YAML scalars that a YAML 1.1 reader would not read back as the same string.
-_YAML_SPECIAL = re.compile(r"^(y|n|yes|no|on|off|true|false|null|~|[-+.0-9].*)$", re.I)
-_YAML_PLAIN = re.compile(r"^[A-Za-z_][A-Za-z0-9_.\-/]*$")
-
-
-def _yaml_key(name: str) -> str:
-    """A link name as a YAML key: plain where that reads back as the same string, else quoted
-    (a JSON string is a YAML double-quoted scalar)."""
-    name = str(name)
-    if _YAML_PLAIN.match(name) and not _YAML_SPECIAL.match(name):
-        return name
-    return json.dumps(name)
-
-
-def _yaml_float(value: float) -> str:
-    """``repr`` of a float, with a decimal point in the mantissa: ``1e-05`` -> ``1.0e-05``."""
-    text = repr(float(value))
-    if not math.isfinite(float(value)):
-        raise NdpackError(f"cannot write {text} in cuRobo's collision spheres: every number must be finite")
-    mantissa, e, exponent = text.partition("e")
-    if e and "." not in mantissa:
-        text = f"{mantissa}.0e{exponent}"
-    return text
+        if not (np.isfinite(centers).all() and np.isfinite(radii).all()):
+            raise NdpackError(f"cannot write link {link!r} in cuRobo's collision spheres: every number must be finite")
+        document[str(link)] = [{"center": center, "radius": radius}
+                               for center, radius in zip(centers.tolist(), radii.tolist())]
+    lines = [f"# {line}".rstrip() for line in (comment.splitlines() if comment else [])]
+    body = yaml.safe_dump({"collision_spheres": document}, sort_keys=False, default_flow_style=None)
+    return "\n".join(lines + [body])
 
 
 def _curobo_packing(document: dict) -> Packing:
@@ -1029,154 +1001,13 @@ def _find_collision_spheres(document, depth: int = 0):
 
 
 def _load_yaml(text: str):
-    """A YAML document: with PyYAML's ``safe_load`` where it is installed, else with
-    :func:`_simple_yaml` (enough for cuRobo's sphere files)."""
-    try:
-        import yaml
-    except ImportError:
-        return _simple_yaml(text)
+    """A YAML document, read with PyYAML's ``safe_load``."""
+    import yaml
+
     try:
         return yaml.safe_load(text)
     except yaml.YAMLError as error:
         raise ValueError(f"its YAML is not valid ({' '.join(str(error).split())})") from None
-
-
-def _simple_yaml(text: str):
-    """The subset of YAML that cuRobo's sphere files use, read without a YAML library: block
-    mappings (plain or quoted keys), block lists (``- `` items, mappings among them), and flow
-    lists of scalars (``[0.1, 0.2, 0.3]``); numbers, quoted and plain strings, true, false and
-    null. Anything else raises ValueError."""
-    rows = []
-    for number, raw in enumerate(text.splitlines(), 1):
-        line = _strip_comment(raw).rstrip()
-        if not line.strip() or line.strip() in ("---", "..."):
-            continue
-        if "\t" in line[: len(line) - len(line.lstrip())]:
-            raise ValueError(f"line {number} is indented with a tab, which YAML does not allow")
-        rows.append([len(line) - len(line.lstrip()), line.strip(), number])
-    if not rows:
-        return None
-    value, end = _yaml_block(rows, 0, rows[0][0])
-    if end != len(rows):
-        raise ValueError(f"line {rows[end][2]} is indented where nothing can follow (install PyYAML to read "
-                         "more than cuRobo's sphere files)")
-    return value
-
-
-def _yaml_block(rows, i, indent):
-    """The block (a mapping or a list) whose rows start at ``i`` at ``indent``; returns it and
-    the index of the first row after it."""
-    if rows[i][1].startswith("- ") or rows[i][1] == "-":
-        items = []
-        while i < len(rows) and rows[i][0] == indent and (rows[i][1].startswith("- ") or rows[i][1] == "-"):
-            rest = rows[i][1][1:].lstrip()
-            if not rest:  # "-" alone: the item is the block below
-                if i + 1 < len(rows) and rows[i + 1][0] > indent:
-                    value, i = _yaml_block(rows, i + 1, rows[i + 1][0])
-                else:
-                    value, i = None, i + 1
-            elif _yaml_split(rest) is None:  # "- scalar"
-                value, i = _yaml_scalar(rest, rows[i][2]), i + 1
-            else:  # "- key: value": a mapping whose first row continues at the item's indent
-                inner = indent + len(rows[i][1]) - len(rest)
-                rows[i] = [inner, rest, rows[i][2]]
-                value, i = _yaml_block(rows, i, inner)
-            items.append(value)
-        return items, i
-    mapping = {}
-    while i < len(rows) and rows[i][0] == indent:
-        split = _yaml_split(rows[i][1])
-        if split is None:
-            raise ValueError(f"line {rows[i][2]} is not 'key: value' ({rows[i][1][:40]!r})")
-        key, rest = split
-        if rest:
-            mapping[key], i = _yaml_scalar(rest, rows[i][2]), i + 1
-        elif i + 1 < len(rows) and (rows[i + 1][0] > indent or (rows[i + 1][0] == indent and
-                                                                rows[i + 1][1].startswith("-"))):
-            mapping[key], i = _yaml_block(rows, i + 1, rows[i + 1][0])
-        else:
-            mapping[key], i = None, i + 1
-    if i < len(rows) and rows[i][0] > indent:
-        raise ValueError(f"line {rows[i][2]} is indented more than the lines before it")
-    return mapping, i
-
-
-_YAML_KEY = re.compile(r'^("(?:[^"\\]|\\.)*"|\'(?:[^\']|\'\')*\'|[^\'"\[\]{}#,][^:#]*?)\s*:(?:\s+(.*))?$')
-
-
-def _yaml_split(text: str):
-    """``key: value`` -> ``(key, value text)`` (the text empty for a block below); None if the
-    text is not a mapping entry."""
-    match = _YAML_KEY.match(text)
-    if match is None:
-        return None
-    key = match.group(1)
-    if key[0] in "\"'":
-        key = _yaml_scalar(key, 0)
-    return str(key), (match.group(2) or "").strip()
-
-
-def _yaml_scalar(text: str, number: int):
-    text = text.strip()
-    if not text:
-        return None
-    if text.startswith("[") and text.endswith("]"):
-        inner = text[1:-1].strip()
-        if "[" in inner or "{" in inner:
-            raise ValueError(f"line {number} has a nested flow list (install PyYAML to read it)")
-        return [_yaml_scalar(part, number) for part in _flow_items(inner)] if inner else []
-    if text == "{}":
-        return {}
-    if text.startswith('"') and text.endswith('"') and len(text) >= 2:
-        return json.loads(text)
-    if text.startswith("'") and text.endswith("'") and len(text) >= 2:
-        return text[1:-1].replace("''", "'")
-    if text[:1] in "[{|>&*!\"'":
-        raise ValueError(f"line {number} holds {text[:20]!r}, which this reader does not take (install PyYAML)")
-    lowered = text.lower()
-    if lowered in ("true", "false"):
-        return lowered == "true"
-    if lowered in ("null", "~"):
-        return None
-    try:
-        return int(text)
-    except ValueError:
-        pass
-    try:
-        return float(text)
-    except ValueError:
-        return text
-
-
-def _flow_items(text: str) -> list[str]:
-    """``a, "b, c", d`` -> its items (commas inside quotes kept)."""
-    items, current, quote = [], "", None
-    for char in text:
-        if quote:
-            quote = None if char == quote else quote
-        elif char in "\"'":
-            quote = char
-        elif char == ",":
-            items.append(current)
-            current = ""
-            continue
-        current += char
-    items.append(current)
-    return [item.strip() for item in items]
-
-
-def _strip_comment(line: str) -> str:
-    """The line without a ``#`` comment (a ``#`` that starts the line or follows a space,
-    outside quotes)."""
-    quote = None
-    for k, char in enumerate(line):
-        if quote:
-            quote = None if char == quote else quote
-        elif char in "\"'":
-            quote = char
-        elif char == "#" and (k == 0 or line[k - 1] in " \t"):
-            return line[:k]
-    return line
 
 
 # ---------------------------------------------------------------------------------- DEM codes

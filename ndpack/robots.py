@@ -242,13 +242,10 @@ def rpy_matrix(rpy) -> np.ndarray:
     (3, 3) float64
         ``Rz(yaw) @ Ry(pitch) @ Rx(roll)``: a point ``p`` of the child frame is ``R @ p + xyz``.
     """
-    roll, pitch, yaw = (float(angle) for angle in rpy)
-    cr, sr, cp, sp, cy, sy = math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch), math.cos(yaw), \
-        math.sin(yaw)
-    rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
-    ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
-    return rz @ ry @ rx
+    from scipy.spatial.transform import Rotation
+
+    # Lower-case axes are SciPy's extrinsic (fixed) ones: x first, so R = Rz @ Ry @ Rx.
+    return Rotation.from_euler("xyz", [float(angle) for angle in rpy]).as_matrix()
 
 
 def _numbers(element: ET.Element, attribute: str, count: int, default=None, what: str = "") -> np.ndarray:

@@ -85,22 +85,22 @@ class SphereTree:
         sound tree); for covering trees also ``uncovered``, per level the samples outside the
         level's union; for inner trees ``enclosed``, the children not inside their parent.
         """
-        from .boundary import boundary_samples, interior_samples
+        from .boundary import samples as shape_samples
 
         if self.kind == "inner":
             outside = 0
             for level in range(1, self.depth):
                 parent = self.parents[level]
-                reach = np.linalg.norm(self.centers[level] - self.centers[level - 1][parent], axis=1) + self.radii[level]
+                offsets = self.centers[level] - self.centers[level - 1][parent]
+                reach = np.linalg.norm(offsets, axis=1) + self.radii[level]
                 outside += int(np.count_nonzero(reach > self.radii[level - 1][parent] * (1 + 1e-12) + 1e-300))
             return {"enclosed": outside == 0, "not_enclosed": outside}
         shape = self.shape if shape is None else shape
         rng = np.random.default_rng(seed)
-        boundary, _ = boundary_samples(shape, samples, rng)
-        points = np.vstack([boundary, interior_samples(shape, max(samples // 4, 1), rng)])
+        points, _ = shape_samples(shape, samples, rng)
         uncovered = [int(np.count_nonzero(ball_union.gaps(points, c, r) > 1e-9 * shape.scale))
                      for c, r in zip(self.centers, self.radii)]
-        return {"uncovered": uncovered, "nested": _nesting_violations(self, points)}
+        return {"uncovered": uncovered, "nested": _nest(self, points)}
 
     def save(self, path) -> Path:
         """Write the sphere-tree toolkit's ``.sph``: ``levels branching``, then a line ``x y z r 1`` per
@@ -157,7 +157,7 @@ def inner_tree(packing, branching: int = 8) -> SphereTree:
     # Top down: the groups of leaf ids at every level.
     groups = [[np.arange(len(radii))]]
     for level in range(1, depth):
-        groups.append([part for group in groups[-1] for part in _split(centers, group, branching)])
+        groups.append([part for group in groups[-1] for part in _kd_parts(centers, group, min(branching, len(group)))])
     parents = [np.full(1, -1, dtype=np.int64)]
     for level in range(1, depth):
         owner = {int(leaf): i for i, group in enumerate(groups[level - 1]) for leaf in group}
@@ -174,14 +174,10 @@ def inner_tree(packing, branching: int = 8) -> SphereTree:
     return SphereTree(tree_centers, tree_radii, parents, branching, "inner", [float("nan")] * depth)
 
 
-def _split(centers, ids, branching):
-    """Split ``ids`` into ``min(branching, len(ids))`` groups of balanced size along the widest
-    axis, recursively halving the number of groups (a k-d split). A group of ``s`` ids, at most
-    ``branching * m``, gives groups of at most ``m``."""
-    return _kd_parts(centers, ids, min(branching, len(ids)))
-
-
 def _kd_parts(centers, ids, parts):
+    """Split ``ids`` into ``parts`` groups of balanced size along the widest axis, recursively
+    halving the number of groups (a k-d split): a group of at most ``parts * m`` gives groups of
+    at most ``m``."""
     if parts == 1 or len(ids) <= 1:
         return [ids]
     points = centers[ids]
@@ -257,7 +253,7 @@ def covering_tree(shape, branching: int = 8, depth: int = 3, *, samples: int = 2
                 grown = True
                 lengths = np.linalg.norm(fresh[missed] - centers[level][cheapest[missed]], axis=1)
                 np.maximum.at(radii[level], cheapest[missed], lengths + 0.5 * problem.spacing)
-        grown |= _nest(tree, fresh, 0.5 * problem.spacing)
+        grown |= _nest(tree, fresh, 0.5 * problem.spacing) > 0
         clean = 0 if grown else clean + 1
         if clean == 2:
             break
@@ -265,34 +261,22 @@ def covering_tree(shape, branching: int = 8, depth: int = 3, *, samples: int = 2
     return tree
 
 
-def _nest(tree: SphereTree, points, slack: float) -> bool:
-    """Grow every node to hold the ``points`` its children hold, plus ``slack`` (bottom up).
-    Returns whether any grew."""
-    grown = False
+def _nest(tree: SphereTree, points, slack: float | None = None) -> int:
+    """Count the ``points`` that lie in a child but outside its parent, over all nodes; with a
+    ``slack``, first grow each such parent to hold them plus ``slack`` (bottom up, so that growth
+    reaches the root). Returns the count."""
+    count = 0
     for level in range(tree.depth - 1, 0, -1):
         holders = cKDTree(points).query_ball_point(tree.centers[level], tree.radii[level], return_sorted=False)
-        parents = tree.parents[level]
         for child, held in enumerate(holders):
             if not held:
                 continue
-            parent = parents[child]
-            reach = float(np.linalg.norm(points[held] - tree.centers[level - 1][parent], axis=1).max())
-            if reach > tree.radii[level - 1][parent]:
-                tree.radii[level - 1][parent] = reach + slack
-                grown = True
-    return grown
-
-
-def _nesting_violations(tree: SphereTree, points) -> int:
-    """Samples lying in a child but outside its parent, over all nodes."""
-    count = 0
-    for level in range(1, tree.depth):
-        holders = cKDTree(points).query_ball_point(tree.centers[level], tree.radii[level], return_sorted=False)
-        for child, held in enumerate(holders):
-            if held:
-                parent = tree.parents[level][child]
-                reach = np.linalg.norm(points[held] - tree.centers[level - 1][parent], axis=1)
-                count += int(np.count_nonzero(reach > tree.radii[level - 1][parent]))
+            parent = tree.parents[level][child]
+            reach = np.linalg.norm(points[held] - tree.centers[level - 1][parent], axis=1)
+            outside = int(np.count_nonzero(reach > tree.radii[level - 1][parent]))
+            count += outside
+            if outside and slack is not None:
+                tree.radii[level - 1][parent] = float(reach.max()) + slack
     return count
 
 
