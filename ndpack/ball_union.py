@@ -33,6 +33,19 @@ def gaps(points, centers, radii) -> np.ndarray:
     return out
 
 
+def covered(points, centers, radii) -> np.ndarray:
+    """Which points lie in the union of the balls (``gaps(...) <= 0``), (n,) bool.
+
+    Faster than :func:`gaps` where most points are covered: a point stops at the first ball that
+    holds it, and the balls are tried largest first.
+    """
+    points, centers, radii = _arrays(points, centers, radii)
+    order = np.argsort(-radii, kind="stable")
+    out = np.empty(len(points), dtype=np.bool_)
+    _kernels()[2](points, np.ascontiguousarray(centers[order]), np.ascontiguousarray(radii[order]), out)
+    return out
+
+
 def best_balls(points, centers, radii, clearances) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """For each point: its gap, the covering ball that reaches least outside the shape, and the
     ball that would reach least outside the shape if grown to cover it.
@@ -78,8 +91,7 @@ def _kernels():
 
     global prange
     prange = numba.prange
-    return (numba.njit(parallel=True, cache=True)(_gaps),
-            numba.njit(parallel=True, cache=True)(_best_balls))
+    return tuple(numba.njit(parallel=True, cache=True)(kernel) for kernel in (_gaps, _best_balls, _covered))
 
 
 prange = range  # replaced by numba.prange when the kernels are compiled
@@ -97,6 +109,20 @@ def _gaps(points, centers, radii, out):
             if gap < best:
                 best = gap
         out[i] = best
+
+
+def _covered(points, centers, radii, out):
+    for i in prange(points.shape[0]):
+        inside = False
+        for j in range(centers.shape[0]):
+            length2 = 0.0
+            for k in range(points.shape[1]):
+                t = points[i, k] - centers[j, k]
+                length2 += t * t
+            if length2 <= radii[j] * radii[j]:
+                inside = True
+                break
+        out[i] = inside
 
 
 def _best_balls(points, centers, radii, clearances, gap_out, covering_out, cheapest_out, cost_out):

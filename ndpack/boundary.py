@@ -17,9 +17,12 @@ from .oracle import Oracle, unit_rows
 
 #: Projections of a band sample onto the boundary; exact oracles need one, lower bounds a few.
 PROJECTIONS = 6
+#: Half-width of the band around the boundary whose points are projected, as a share of the
+#: bounds' largest extent.
+BAND = 0.02
 
 
-def boundary_samples(shape: Oracle, count: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+def boundary_samples(shape: Oracle, count: int, rng: np.random.Generator, cells=None) -> tuple[np.ndarray, np.ndarray]:
     """``count`` random points on the boundary of ``shape`` and the outward normals there.
 
     Parameters
@@ -28,6 +31,9 @@ def boundary_samples(shape: Oracle, count: int, rng: np.random.Generator) -> tup
         A bounded shape.
     count : int
     rng : numpy.random.Generator
+    cells : InsideCells, optional
+        The shape's grid from :func:`sample_cells`: the band of shapes other than meshes and
+        polygons is then drawn in its boundary cells only, which spares most distances.
 
     Returns
     -------
@@ -35,16 +41,35 @@ def boundary_samples(shape: Oracle, count: int, rng: np.random.Generator) -> tup
     normals : (count, d) float64
         Unit outward normals (the distance's gradient for shapes other than meshes and polygons).
     """
-    faces = getattr(shape, "given_faces", None)
-    if faces is not None and getattr(shape, "vertices", None) is not None:
-        return _mesh_samples(shape.vertices, shape.faces, count, rng)
-    if hasattr(shape, "_start") and hasattr(shape, "_normal") and shape.dim == 2:
+    if exactly_sampled(shape):
+        if getattr(shape, "vertices", None) is not None:
+            return _mesh_samples(shape.vertices, shape.faces, count, rng)
         return _outline_samples(shape._start, shape._end, shape._normal, count, rng)
-    return _projected_samples(shape, count, rng)
+    return _projected_samples(shape, count, rng, cells)
 
 
-def samples(shape: Oracle, count: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """``count`` boundary samples, then a quarter as many inside.
+def exactly_sampled(shape: Oracle) -> bool:
+    """Whether the boundary of ``shape`` is sampled on its own pieces (triangles, edges), not by projection."""
+    return ((getattr(shape, "given_faces", None) is not None and getattr(shape, "vertices", None) is not None)
+            or (hasattr(shape, "_start") and hasattr(shape, "_normal") and shape.dim == 2))
+
+
+def sample_cells(shape: Oracle):
+    """The shape's :class:`~ndpack.inside_cells.InsideCells` for :func:`samples`: with a margin of
+    the projection band where the boundary is sampled by projection."""
+    from .inside_cells import InsideCells
+
+    return InsideCells(shape, margin=0.0 if exactly_sampled(shape) else _band(shape))
+
+
+def _band(shape):
+    lower, upper = shape.bounds
+    return BAND * float(np.max(np.asarray(upper) - np.asarray(lower)))
+
+
+def samples(shape: Oracle, count: int, rng: np.random.Generator, cells=None) -> tuple[np.ndarray, np.ndarray]:
+    """``count`` boundary samples, then a quarter as many inside (drawn in ``cells``, the shape's
+    :class:`~ndpack.inside_cells.InsideCells`, when given: far fewer distances).
 
     Returns
     -------
@@ -52,13 +77,15 @@ def samples(shape: Oracle, count: int, rng: np.random.Generator) -> tuple[np.nda
     normals : (count + count // 4, d) float64
         Outward normals on the boundary; zero rows for the interior points.
     """
-    boundary, normals = boundary_samples(shape, count, rng)
-    inside = interior_samples(shape, max(count // 4, 1), rng)
+    boundary, normals = boundary_samples(shape, count, rng, cells)
+    inside_count = max(count // 4, 1)
+    inside = interior_samples(shape, inside_count, rng) if cells is None else cells.interior(inside_count, rng)
     return np.vstack([boundary, inside]), np.vstack([normals, np.zeros_like(inside)])
 
 
 def project(shape: Oracle, points) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Move ``points`` onto the boundary along the gradient (:data:`PROJECTIONS` times).
+    """Move ``points`` onto the boundary along the gradient (at most :data:`PROJECTIONS` times;
+    a point stops once on the boundary, after one step where the distance is exact).
 
     Returns
     -------
@@ -68,11 +95,22 @@ def project(shape: Oracle, points) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     on : (n,) bool
         Which landed on the boundary (within 1e-9 of the shape's scale).
     """
-    for _ in range(PROJECTIONS):
-        distances, gradients = shape._distance_and_gradient(points)
-        points = points - distances[:, None] * gradients
-    distances, gradients = shape._distance_and_gradient(points)
-    return points, unit_rows(gradients), np.abs(distances) <= 1e-9 * shape.scale
+    points = np.array(points, dtype=np.float64).reshape(-1, shape.dim)
+    normals = np.zeros_like(points)
+    on = np.zeros(len(points), dtype=bool)
+    moving = np.arange(len(points))
+    for step in range(PROJECTIONS + 1):
+        distances, gradients = shape._distance_and_gradient(points[moving])
+        landed = np.abs(distances) <= 1e-9 * shape.scale
+        on[moving[landed]] = True
+        last = step == PROJECTIONS
+        finished = np.ones_like(landed) if last else landed
+        normals[moving[finished]] = unit_rows(gradients[finished])
+        moving, distances, gradients = moving[~finished], distances[~finished], gradients[~finished]
+        if not len(moving):
+            break
+        points[moving] -= distances[:, None] * gradients
+    return points, normals, on
 
 
 def interior_samples(shape: Oracle, count: int, rng: np.random.Generator, tries: int = 200) -> np.ndarray:
@@ -106,15 +144,19 @@ def _outline_samples(starts, ends, normals, count, rng):
     return starts[which] + t * (ends[which] - starts[which]), normals[which].copy()
 
 
-def _projected_samples(shape, count, rng, tries: int = 400):
+def _projected_samples(shape, count, rng, cells=None, tries: int = 400):
+    """Points uniform in the band ``|f| < band`` (beyond the bounds too, so that edges and corners
+    get the points outside them), projected onto the boundary."""
     lower, upper = shape.bounds
-    extent = upper - lower
-    band = 0.02 * float(extent.max())
-    # The boundary may touch the bounds: sample a little beyond them.
+    band = _band(shape)
     lower, upper = lower - band, upper + band
+    use_cells = cells is not None and cells.margin >= band
     found, total = [], 0
     for _ in range(tries):
-        points = lower + (upper - lower) * rng.random((max(8 * count, 4096), shape.dim))
+        if use_cells:  # the same distribution: every point of the band lies in a boundary cell
+            points, _ = cells.draw(max(3 * (count - total), 1024), rng, boundary=True)
+        else:
+            points = lower + (upper - lower) * rng.random((max(8 * count, 4096), shape.dim))
         points = points[np.abs(shape._distance(points)) < band]
         points, gradients, on = project(shape, points)
         found.append((points[on], gradients[on]))

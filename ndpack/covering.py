@@ -16,15 +16,21 @@ oracle (a lower bound of the distance only makes ``d`` smaller). A covering that
 1. Candidate centres: the medial-axis sample of a packing's first round (ProtoSphere's converged
    prototypes) and, for a share of the boundary samples, the centre of the largest inscribed
    ball touching there (the shrinking-ball method, a bisection along the inward normal).
-2. Samples of the boundary and of the inside (:mod:`ndpack.boundary`) make the set to cover.
+2. Samples of the boundary and of the inside (:mod:`ndpack.boundary`) make the set to cover;
+   the inside is drawn in a grid of cells known to be inside (:mod:`ndpack.inside_cells`), so
+   that few points need a distance.
 3. A greedy set cover (within a factor ``ln n`` of the fewest balls) picks balls of radius
    ``d + t``; balls it made redundant are dropped. Samples no candidate reaches get a ball of
    their own.
 4. Local refinement: each ball shrinks to the samples it serves best (the fewest reaching out),
-   plus half the samples' spacing, which lowers the mean protrusion.
+   plus a seam (the share :data:`SEAM_SHARE` of ``t`` kept back in step 3; half the samples'
+   spacing for a count), which lowers the mean protrusion.
 5. Gaps between samples: fresh samples are drawn; each one found outside the union is served by
    growing the ball that then reaches out least (within ``t``), or by a new ball, until a fresh
    set is covered (at most :data:`FIX_PASSES` sets).
+6. The check (:func:`check_covering`) on samples not used so far; where it finds a point outside
+   the union, that point is served as in step 5 and a new check is drawn (at most
+   :data:`CHECKS`), so that the report is always on samples the covering was not fitted to.
 
 Given a count instead of a tolerance, the smallest ``t`` whose cover needs at most that many balls
 is found by bisection (on fewer samples where the balls are large), and step 5 grows balls
@@ -49,8 +55,9 @@ from scipy.spatial import cKDTree
 from tqdm.auto import tqdm
 
 from . import ball_union
-from .boundary import project, samples as shape_samples
+from .boundary import project, sample_cells, samples as shape_samples
 from .errors import ParameterError
+from .inside_cells import InsideCells
 from .oracle import Oracle, check_packable
 
 #: Boundary samples the cover is made on (the inside gets a quarter as many more).
@@ -64,6 +71,8 @@ SHRINK_STEPS = 18
 #: Sets of fresh samples drawn to close the gaps between samples, at most (two in a row must be
 #: covered).
 FIX_PASSES = 12
+#: Checks on fresh samples, at most: where one finds a gap, it is served and a new check drawn.
+CHECKS = 3
 #: Fresh samples of each such set, as a multiple of ``samples``.
 FIX_SHARE = 3
 #: Boundary samples of the largest such set.
@@ -163,7 +172,8 @@ class Covering:
         The check on fresh samples.
     params : dict
         The run's parameters: ``n`` or ``protrusion`` as asked, ``tolerance`` (the protrusion the
-        cover was made for), samples, seed, candidates, passes and seconds.
+        cover was made for), samples, seed, candidates, passes (fresh sets drawn to close gaps),
+        checks (checks drawn; the report is the last one's) and seconds.
     shape : Oracle
     """
 
@@ -289,10 +299,17 @@ def cover(
     centers, radii, clearance, passes = problem.close_gaps(centers, radii, clearance, inner, limit, tolerance - inner)
     bar.update()
     bar.close()
-    report = check_covering(shape, centers, radii, samples=check_samples, seed=seed + 1)
+    for checks in range(1, CHECKS + 1):
+        report, missed, missed_normals = _check(shape, centers, radii, check_samples, 200_000, seed + checks,
+                                                problem.cells)
+        if report.covered or checks == CHECKS:
+            break
+        # The check found points between every sample so far: serve them, and check on fresh ones.
+        centers, radii, clearance = problem.fix(missed, missed_normals, centers, radii, clearance, inner, limit,
+                                                tolerance - inner)
     params = {"n": None if n is None else int(n), "protrusion": None if protrusion is None else float(protrusion),
               "tolerance": tolerance, "samples": int(samples), "seed": int(seed),
-              "candidates": len(problem.candidates), "passes": passes, "seconds": time.perf_counter() - started}
+              "candidates": len(problem.candidates), "passes": passes, "checks": checks, "seconds": time.perf_counter() - started}
     return Covering(centers, radii, _protrusions(shape, centers, radii), report, params, shape)
 
 
@@ -317,8 +334,8 @@ class Problem:
     rng : numpy.random.Generator
     """
 
-    def __init__(self, shape, points, normals, candidates, clearances, samples, rng):
-        self.shape, self.points, self.normals = shape, points, normals
+    def __init__(self, shape, points, normals, candidates, clearances, samples, rng, cells):
+        self.shape, self.points, self.normals, self.cells = shape, points, normals, cells
         self.candidates, self.clearances = candidates, clearances
         self.spacing = _spacing(points[np.any(normals != 0, axis=1)])
         self.samples, self.rng = samples, rng
@@ -332,13 +349,14 @@ class Problem:
         rng = np.random.default_rng(seed)
         if packing is None:
             packing = pack(shape, n=1, mode="fast", seed=seed, backend=backend, device=device, progress=False)
-        points, normals = shape_samples(shape, samples, rng)
+        cells = sample_cells(shape)
+        points, normals = shape_samples(shape, samples, rng, cells)
         candidates, clearances = _candidates(shape, packing, points[:samples], normals[:samples], rng)
-        return cls(shape, points, normals, candidates, clearances, samples, rng)
+        return cls(shape, points, normals, candidates, clearances, samples, rng, cells)
 
     def fresh(self, count):
         """New samples: ``count`` on the boundary and a quarter as many inside; (points, normals)."""
-        return shape_samples(self.shape, count, self.rng)
+        return shape_samples(self.shape, count, self.rng, self.cells)
 
     def near(self, ids):
         """Candidate ids whose centre lies within the bounding ball of the points ``ids``."""
@@ -381,18 +399,22 @@ class Problem:
         while passes < FIX_PASSES and clean < 2:
             passes += 1
             fresh, normals = self.fresh(size)
-            missed = ball_union.gaps(fresh, centers, radii) > 0
+            missed = ~ball_union.covered(fresh, centers, radii)
             size = min(2 * size, FIX_LARGEST)  # the gaps left are ever smaller: look harder
             if not missed.any():
                 clean += 1
                 continue
             clean = 0
-            on_boundary = np.any(normals != 0, axis=1)
-            near, near_normals = _around(self.shape, fresh[missed & on_boundary], fresh[missed & ~on_boundary],
-                                         self.spacing, self.rng)
-            centers, radii, clearance = self.serve(None, centers, radii, clearance, inner, limit, seam, near,
-                                                   near_normals)
+            centers, radii, clearance = self.fix(fresh[missed], normals[missed], centers, radii, clearance, inner,
+                                                 limit, seam)
         return centers, radii, clearance, passes
+
+    def fix(self, points, normals, centers, radii, clearance, inner, limit, seam):
+        """Serve ``points`` found outside the union (normals: zero rows inside) and points drawn
+        around them (the gap is nearby); returns the centres, radii and clearances."""
+        on_boundary = np.any(normals != 0, axis=1)
+        near, near_normals = _around(self.shape, points[on_boundary], points[~on_boundary], self.spacing, self.rng)
+        return self.serve(None, centers, radii, clearance, inner, limit, seam, near, near_normals)
 
 
 def _check_request(n, protrusion, samples, check_samples):
@@ -607,7 +629,7 @@ def _thin(points, candidates, clearances, tolerance, rng, tree=None):
 def _missed(points, centers, radii) -> int:
     if not len(centers):
         return len(points)
-    return int(np.count_nonzero(ball_union.gaps(points, centers, radii) > 0))
+    return int(np.count_nonzero(~ball_union.covered(points, centers, radii)))
 
 
 # ------------------------------------------------------------------------------------------------ refinement
@@ -693,7 +715,7 @@ def _protrusions(shape, centers, radii) -> np.ndarray:
 
 # ------------------------------------------------------------------------------------------------ the check
 def check_covering(shape: Oracle, centers, radii, *, samples: int = CHECK_SAMPLES, volume_samples: int = 200_000,
-                   seed: int = 1) -> CoverReport:
+                   seed: int = 1, cells: InsideCells | None = None) -> CoverReport:
     """Check in float64 how well spheres cover ``shape``: fresh boundary and interior samples
     outside their union, how far they reach outside the shape, and the volume they cover there.
 
@@ -707,6 +729,9 @@ def check_covering(shape: Oracle, centers, radii, *, samples: int = CHECK_SAMPLE
     volume_samples : int
         Monte Carlo points for the volume outside.
     seed : int
+    cells : InsideCells, optional
+        The shape's grid of inside and outside cells (:func:`ndpack.boundary.sample_cells`), if
+        already built: it spares most distances.
 
     Returns
     -------
@@ -720,15 +745,22 @@ def check_covering(shape: Oracle, centers, radii, *, samples: int = CHECK_SAMPLE
     radii = np.asarray(radii, dtype=np.float64).reshape(-1)
     if radii.shape != (len(centers),) or not np.all(np.isfinite(radii)):
         raise ParameterError(f"radii must be {len(centers)} finite numbers, one per centre; got shape {radii.shape}")
+    return _check(shape, centers, radii, samples, volume_samples, seed, cells)[0]
+
+
+def _check(shape, centers, radii, samples, volume_samples, seed, cells=None):
+    """:func:`check_covering`'s report, and the samples outside the union with their normals
+    (zero rows inside)."""
     rng = np.random.default_rng(seed)
-    points, _ = shape_samples(shape, samples, rng)
+    cells = sample_cells(shape) if cells is None else cells
+    points, normals = shape_samples(shape, samples, rng, cells)
     tolerance = GAP_TOLERANCE * shape.scale
     all_gaps = ball_union.gaps(points, centers, radii)
     boundary_gaps, inside_gaps = all_gaps[:samples], all_gaps[samples:]
     protrusion = _protrusions(shape, centers, radii)
     volume = float(shape.volume().value)
-    outside, error = _outside_volume(shape, centers, radii, volume_samples, rng)
-    return CoverReport(
+    outside, error = _outside_volume(cells, centers, radii, volume_samples, rng)
+    report = CoverReport(
         boundary_samples=len(boundary_gaps), interior_samples=len(inside_gaps),
         boundary_covered=float(np.mean(boundary_gaps <= tolerance)),
         interior_covered=float(np.mean(inside_gaps <= tolerance)),
@@ -737,18 +769,20 @@ def check_covering(shape: Oracle, centers, radii, *, samples: int = CHECK_SAMPLE
         mean_protrusion=float(protrusion.mean()) if len(radii) else 0.0,
         diagonal=float(np.linalg.norm(np.ptp(shape.bounds, axis=0))),
         outside_volume=outside, outside_volume_error=error, shape_volume=volume)
+    missed = all_gaps > tolerance
+    return report, points[missed], normals[missed]
 
 
-def _outside_volume(shape, centers, radii, count, rng):
-    """Monte Carlo volume of the union of the balls outside the shape, and its standard error."""
+def _outside_volume(cells, centers, radii, count, rng):
+    """Monte Carlo volume of the union of the balls outside the shape (of ``cells``), and its standard error."""
     if not len(radii):
         return 0.0, 0.0
     lower = (centers - radii[:, None]).min(axis=0)
     upper = (centers + radii[:, None]).max(axis=0)
     box = float(np.prod(upper - lower))
-    points = lower + (upper - lower) * rng.random((count, shape.dim))
-    hits = (ball_union.gaps(points, centers, radii) <= 0) & (shape._distance(points) > 0)
-    share = float(hits.mean())
+    points = lower + (upper - lower) * rng.random((count, len(lower)))
+    in_union = np.flatnonzero(ball_union.covered(points, centers, radii))
+    share = float(np.count_nonzero(~cells.inside(points[in_union]))) / count
     return box * share, box * math.sqrt(max(share * (1 - share), 0.25 / count ** 2) / count)
 
 

@@ -72,9 +72,14 @@ def _namespace():
     return numba_namespace(program, "cpu", _LOOPS + serial, jit)
 
 
+#: A mesh query costs microseconds a point, so threads pay from fewer points than the general
+#: kernels' :data:`~ndpack.kernels.compile.PARALLEL_FROM`.
+PARALLEL_FROM_MESH = min(PARALLEL_FROM, 1_000)
+
+
 def _run(name: str, points: np.ndarray, *args):
     namespace = _namespace()
-    loop = namespace[name if len(points) >= PARALLEL_FROM else f"serial_{name}"]
+    loop = namespace[name if len(points) >= PARALLEL_FROM_MESH else f"serial_{name}"]
     loop(np.ascontiguousarray(points, dtype=np.float64), *args)
 
 
