@@ -418,7 +418,7 @@ def _cover(args) -> int:
     if args.package:
         raise ParameterError("--package applies to a URDF's meshes, and the shape is not a .urdf file: leave it out")
     from .covering import cover
-    from .sources import load_shape
+    from .sources import describe, load_shape
 
     source = args.shape
     if args.dim is not None:
@@ -443,9 +443,13 @@ def _cover(args) -> int:
                                                             if args.protrusion is not None else ""))
     print(f"spheres:  {len(covering)} ({asked})")
     print(f"covering: {covering.report.summary()}")
+    for note in covering.notes:
+        print(f"note:     {note}")
     print(f"time:     {elapsed:.2f} s")
     if args.output:
-        print(f"saved:    {_save_or_keep(covering.as_packing(), args.output, args.format, options)}")
+        spheres = covering.as_packing()
+        spheres.params["source"] = describe(source)  # so that `ndpack verify` finds the shape
+        print(f"saved:    {_save_or_keep(spheres, args.output, args.format, options)}")
     return 0 if covering.report.covered else 1
 
 
@@ -540,6 +544,8 @@ def _verify(args) -> int:
 
     packing = _load(args.packing)
     shape = _recorded_shape(packing, args.shape, required=True, trust=args.trust_source, holes=args.holes)
+    if "covering" in packing.params:
+        return _verify_covering(args, packing, shape)
     report = verify(packing, shape, args.tol, independent=args.independent)
     print(f"{args.packing}: {len(packing)} spheres in {packing.dim}-D against {shape!r}")
     print(f"verified: {report.summary()}")
@@ -547,6 +553,24 @@ def _verify(args) -> int:
     if problem:
         print(f"IMPOSSIBLE: {problem}")
     return 0 if report.ok and not problem else 1
+
+
+def _verify_covering(args, packing, shape) -> int:
+    """A covering's spheres overlap and reach outside: check that they cover the shape, and reach
+    out no farther than asked."""
+    from .covering import check_covering
+
+    if args.tol is not None or args.independent:
+        raise ParameterError("--tol and --independent apply to packings; this file holds a covering (its spheres "
+                             "overlap and reach outside the shape), checked on fresh samples: leave them out")
+    asked = packing.params["covering"].get("protrusion") if isinstance(packing.params["covering"], dict) else None
+    report = check_covering(shape, packing.centers, packing.radii)
+    print(f"{args.packing}: a covering of {len(packing)} spheres in {packing.dim}-D against {shape!r}")
+    print(f"checked:  {report.summary()}")
+    too_far = asked is not None and report.max_protrusion > float(asked) * (1 + 1e-9)
+    if too_far:
+        print(f"REACHES OUT TOO FAR: {report.max_protrusion:.4g}, asked at most {float(asked):.4g}")
+    return 0 if report.covered and not too_far else 1
 
 
 def _render(args) -> int:
@@ -595,12 +619,17 @@ def _info(args) -> int:
     packing = _load(args.packing)
     radii = packing.radii
     print(f"file:       {args.packing}")
-    print(f"spheres:    {len(packing)} in {packing.dim}-D, {len(packing.stats.count)} rounds, "
-          f"stopped by {packing.stop_reason or '-'}")
-    if np.isfinite(packing.volume):
+    covering = "covering" in packing.params
+    if covering:
+        print(f"spheres:    {len(packing)} in {packing.dim}-D, a covering (they overlap and reach outside the shape; "
+              "`ndpack verify` checks that they cover it)")
+    else:
+        print(f"spheres:    {len(packing)} in {packing.dim}-D, {len(packing.stats.count)} rounds, "
+              f"stopped by {packing.stop_reason or '-'}")
+    if np.isfinite(packing.volume) and not covering:
         error = f" +- {packing.fill_error:.4f}" if packing.volume_error else ""
         print(f"fill:       {packing.fill:.6f}{error} of volume {packing.volume:.6g}")
-    problem = volume_problem(packing)
+    problem = None if covering else volume_problem(packing)
     if problem:
         print(f"IMPOSSIBLE: {problem}")
     if len(radii):
@@ -608,7 +637,9 @@ def _info(args) -> int:
         print("radii:      min {:.4g}  q1 {:.4g}  median {:.4g}  q3 {:.4g}  max {:.4g}".format(*quartiles))
         print("            ratio max/min {:.3g}".format(radii.max() / radii.min()))
         _radius_histogram(radii)
-    print("repaired:   " + (repair_summary(packing.repair) if packing.repair else "no (passed the final check as made)"))
+    if not covering:
+        print("repaired:   " + (repair_summary(packing.repair) if packing.repair
+                                 else "no (passed the final check as made)"))
     holes = packing.params.get("holes")
     if holes is not None:
         meaning = {"cap": "an open mesh's holes closed by caps", "refuse": "open meshes refused"}

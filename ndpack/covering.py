@@ -59,6 +59,7 @@ from .boundary import project, sample_cells, samples as shape_samples
 from .errors import ParameterError
 from .inside_cells import InsideCells
 from .oracle import Oracle, check_packable
+from .shapes.mesh import recorded_holes
 
 #: Boundary samples the cover is made on (the inside gets a quarter as many more).
 DEFAULT_SAMPLES = 20_000
@@ -77,6 +78,8 @@ CHECKS = 3
 FIX_SHARE = 3
 #: Boundary samples of the largest such set.
 FIX_LARGEST = 400_000
+#: ... and at most this multiple of ``samples`` (fewer samples asked, less effort).
+FIX_LARGEST_SHARE = 20
 #: Entries of the candidates' coverage sets held at once; more and the samples are thinned.
 SET_BUDGET = 2_000_000
 #: Share of the tolerance kept for the seams between samples: the cover is made for the rest,
@@ -173,7 +176,8 @@ class Covering:
     params : dict
         The run's parameters: ``n`` or ``protrusion`` as asked, ``tolerance`` (the protrusion the
         cover was made for), samples, seed, candidates, passes (fresh sets drawn to close gaps),
-        checks (checks drawn; the report is the last one's) and seconds.
+        checks (checks drawn; the report is the last one's), holes (as :func:`ndpack.pack` records
+        it), notes (see :attr:`notes`) and seconds.
     shape : Oracle
     """
 
@@ -191,8 +195,15 @@ class Covering:
     def __len__(self) -> int:
         return len(self.radii)
 
+    @property
+    def notes(self) -> list[str]:
+        """What the shape's meshes were made into before covering (holes capped, welded vertices,
+        inside by winding number for a surface that crosses itself): the spheres cover that solid."""
+        return list(self.params.get("notes", []))
+
     def summary(self) -> str:
-        return f"{len(self)} spheres in {self.dim}-D covering {self.shape!r}: {self.report.summary()}"
+        notes = "".join(f"\n  note: {note}" for note in self.notes)
+        return f"{len(self)} spheres in {self.dim}-D covering {self.shape!r}: {self.report.summary()}{notes}"
 
     def __repr__(self) -> str:
         return f"<Covering {self.summary()}>"
@@ -200,12 +211,16 @@ class Covering:
     def as_packing(self):
         """The spheres as a :class:`~ndpack.Packing` (to save in any sphere format); its
         ``params["covering"]`` holds this run's parameters. Its spheres overlap and reach out of
-        the shape, so :meth:`Packing.verify` fails on it: check it with :func:`check_covering`."""
+        the shape, so :meth:`Packing.verify` fails on it: check it with :func:`check_covering`
+        (``ndpack verify`` does, for a saved covering)."""
         from .packing import Packing
 
         volume = self.report.shape_volume
+        params = {"covering": dict(self.params)}
+        if self.params.get("holes") is not None:  # verify and render reload the mesh the same way
+            params["holes"] = self.params["holes"]
         return Packing(self.centers.copy(), self.radii.copy(), np.zeros(len(self), np.int64), volume,
-                       params={"covering": dict(self.params)}, stop_reason="covered", shape=self.shape)
+                       params=params, stop_reason="covered", shape=self.shape)
 
     def save(self, path, format: str | None = None, **options) -> Path:
         """Write the spheres in any of :func:`ndpack.formats.table`'s formats (``.sph`` as a 2-level
@@ -309,7 +324,8 @@ def cover(
                                                 tolerance - inner)
     params = {"n": None if n is None else int(n), "protrusion": None if protrusion is None else float(protrusion),
               "tolerance": tolerance, "samples": int(samples), "seed": int(seed),
-              "candidates": len(problem.candidates), "passes": passes, "checks": checks, "seconds": time.perf_counter() - started}
+              "candidates": len(problem.candidates), "passes": passes, "checks": checks,
+              "holes": recorded_holes(shape), "notes": _mesh_notes(shape), "seconds": time.perf_counter() - started}
     return Covering(centers, radii, _protrusions(shape, centers, radii), report, params, shape)
 
 
@@ -391,16 +407,17 @@ class Problem:
                       (self.candidates, self.clearances))
 
     def close_gaps(self, centers, radii, clearance, inner, limit, seam):
-        """Fresh sample sets, each twice as large as the last (up to :data:`FIX_LARGEST`), until
-        two in a row are covered, or :data:`FIX_PASSES` sets: each point outside the union, and
-        points drawn around it, are served. Returns the centres, radii, clearances and the sets
-        drawn."""
+        """Fresh sample sets, each twice as large as the last (up to :data:`FIX_LARGEST`, and
+        :data:`FIX_LARGEST_SHARE` times ``samples``), until two in a row are covered, or
+        :data:`FIX_PASSES` sets: each point outside the union, and points drawn around it, are
+        served. Returns the centres, radii, clearances and the sets drawn."""
         passes, clean, size = 0, 0, FIX_SHARE * self.samples
         while passes < FIX_PASSES and clean < 2:
             passes += 1
             fresh, normals = self.fresh(size)
             missed = ~ball_union.covered(fresh, centers, radii)
-            size = min(2 * size, FIX_LARGEST)  # the gaps left are ever smaller: look harder
+            # The gaps left are ever smaller: look harder.
+            size = min(2 * size, FIX_LARGEST, FIX_LARGEST_SHARE * self.samples)
             if not missed.any():
                 clean += 1
                 continue
@@ -705,6 +722,21 @@ def _refine(points, centers, radii, clearance, slack):
     np.maximum.at(needed, covering[served], lengths)
     keep = np.isfinite(needed)
     return np.minimum(radii, needed + slack), keep
+
+
+def _mesh_notes(shape) -> list[str]:
+    """What was made of the meshes in ``shape``'s tree: capped holes and the mesh's own notes."""
+    from .shapes.mesh import TriangleMesh
+    from .shapes.plugin import tree
+
+    notes = []
+    for node in tree(shape):
+        if isinstance(node, TriangleMesh):
+            if node.holes:
+                notes.append(f"{node!r} is open: {node.holes} hole(s) closed by caps, and the spheres cover the "
+                             "capped solid")
+            notes.extend(f"{node!r}: {note}" for note in node.notes)
+    return notes
 
 
 def _protrusions(shape, centers, radii) -> np.ndarray:

@@ -474,7 +474,7 @@ def cover_urdf(path, out_dir, *, n: int | None = None, protrusion: float | None 
             "max_protrusion": report.max_protrusion, "diagonal": report.diagonal,
             "relative_protrusion": report.max_protrusion / report.diagonal if report.diagonal > 0 else None,
             "covered": report.covered, "worst_gap": report.worst_gap,
-            "seconds": covering.params["seconds"],
+            "notes": covering.notes, "seconds": covering.params["seconds"],
         }
     bar.close()
 

@@ -209,7 +209,7 @@ def covering_tree(shape, branching: int = 8, depth: int = 3, *, samples: int = 2
     SphereTree
         Its ``protrusion`` lists each level's largest ``r + f(c)``.
     """
-    from .covering import FIX_LARGEST, Problem, _protrusions
+    from .covering import FIX_LARGEST, FIX_LARGEST_SHARE, Problem, _protrusions
     from .oracle import check_packable
     from .shapes.adapters import as_oracle
 
@@ -244,7 +244,7 @@ def covering_tree(shape, branching: int = 8, depth: int = 3, *, samples: int = 2
     _nest(tree, problem.points, 0.5 * problem.spacing)
     clean = 0
     for attempt in range(TREE_PASSES):  # fresh sets, ever larger, until two in a row need nothing
-        fresh, _ = problem.fresh(min(samples * 2 ** (attempt + 1), FIX_LARGEST))
+        fresh, _ = problem.fresh(min(samples * 2 ** (attempt + 1), FIX_LARGEST, FIX_LARGEST_SHARE * samples))
         grown = False
         for level in range(depth):
             gap, _, cheapest, _ = ball_union.best_balls(fresh, centers[level], radii[level], clearances[level])

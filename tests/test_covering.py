@@ -207,3 +207,29 @@ def test_inner_tree_encloses_children_and_keeps_the_packing_as_leaves(tmp_path):
     assert flat.check()["enclosed"] and flat.depth == 6
     with pytest.raises(nd.DimensionError, match="3-D"):
         flat.save(tmp_path / "flat.sph")
+
+
+def test_open_mesh_covering_says_so_and_a_saved_covering_verifies_as_one(tmp_path, capsys):
+    from ndpack.cli import main
+
+    sphere = trimesh.creation.icosphere(subdivisions=2)
+    sphere.update_faces(np.flatnonzero(sphere.triangles_center[:, 2] < 0.85))  # a hole at the top
+    sphere.remove_unreferenced_vertices()
+    path = tmp_path / "open.obj"
+    sphere.export(path)
+    out = tmp_path / "open.npz"
+    assert main(["cover", str(path), "--protrusion", "0.03", "-o", str(out), "--samples", "2000",
+                 "--check-samples", "4000", "--holes", "cap"]) == 0
+    printed = capsys.readouterr().out
+    assert "note:" in printed and "capped" in printed
+    assert main(["verify", str(out)]) == 0
+    assert "a covering of" in capsys.readouterr().out
+    # Spheres shrunk by a tenth leave gaps: verify must say so and fail.
+    saved = nd.formats.load(out)
+    saved.radii[:] *= 0.9
+    shrunk = tmp_path / "shrunk.npz"
+    nd.formats.save(saved, shrunk)
+    assert main(["verify", str(shrunk)]) == 1
+    assert "NOT COVERED" in capsys.readouterr().out
+    assert main(["info", str(out)]) == 0
+    assert "a covering" in capsys.readouterr().out
