@@ -45,6 +45,16 @@ def _small_pack(shape, n=1000, **options):
 
 ndpack.pack = _small_pack
 
+_pack_sizes = ndpack.pack_sizes
+
+
+@functools.wraps(_pack_sizes)
+def _small_pack_sizes(shape, distribution, *, n=None, **options):
+    return _pack_sizes(shape, distribution, n=None if n is None else min(int(n), {MAX_SPHERES}), **options)
+
+
+ndpack.pack_sizes = _small_pack_sizes
+
 _cover = ndpack.cover
 
 
