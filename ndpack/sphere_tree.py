@@ -85,7 +85,7 @@ class SphereTree:
         sound tree); for covering trees also ``uncovered``, per level the samples outside the
         level's union; for inner trees ``enclosed``, the children not inside their parent.
         """
-        from .boundary import samples as shape_samples
+        from .boundary import sample_cells, samples as shape_samples
 
         if self.kind == "inner":
             outside = 0
@@ -97,7 +97,7 @@ class SphereTree:
             return {"enclosed": outside == 0, "not_enclosed": outside}
         shape = self.shape if shape is None else shape
         rng = np.random.default_rng(seed)
-        points, _ = shape_samples(shape, samples, rng)
+        points, _ = shape_samples(shape, samples, rng, sample_cells(shape))
         uncovered = [int(np.count_nonzero(ball_union.gaps(points, c, r) > 1e-9 * shape.scale))
                      for c, r in zip(self.centers, self.radii)]
         return {"uncovered": uncovered, "nested": _nest(self, points)}
