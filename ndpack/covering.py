@@ -55,7 +55,7 @@ from scipy.spatial import cKDTree
 from tqdm.auto import tqdm
 
 from . import ball_union
-from .boundary import project, sample_cells, samples as shape_samples
+from .boundary import exactly_sampled, project, sample_cells, samples as shape_samples
 from .errors import ParameterError
 from .inside_cells import InsideCells
 from .oracle import Oracle, check_packable
@@ -275,7 +275,9 @@ def cover(
     seed : int
         Seed of every random sample; equal seeds give equal coverings.
     backend, device :
-        Run the packing that finds the medial-axis sample on this backend (see :func:`ndpack.pack`).
+        Run the packing that finds the medial-axis sample on this backend (see :func:`ndpack.pack`),
+        and, for shapes other than meshes and outlines, the distance queries on its compiled
+        float64 kernels (:class:`CompiledQueries`).
     progress : bool, optional
         Show a progress bar; by default only when stderr is a terminal.
 
@@ -292,7 +294,7 @@ def cover(
     _check_request(n, protrusion, samples, check_samples)
     show = sys.stderr.isatty() if progress is None else progress
     bar = tqdm(total=3, desc="covering", disable=not show, dynamic_ncols=True)
-    problem = Problem.make(shape, samples, packing, seed, backend, device)
+    problem = Problem.make(shape, samples, packing, seed, backend, device, compiled=True)
     bar.update()
     # The cover is made for a share of the tolerance; the rest (the seam) is added to every
     # radius at the end, so that the neighbourhood of every covered sample is covered too.
@@ -315,8 +317,9 @@ def cover(
     bar.update()
     bar.close()
     for checks in range(1, CHECKS + 1):
+        # The check asks the shape itself (the reference), in its own cells.
         report, missed, missed_normals = _check(shape, centers, radii, check_samples, 200_000, seed + checks,
-                                                problem.cells)
+                                                problem.cells if problem.shape is shape else None)
         if report.covered or checks == CHECKS:
             break
         # The check found points between every sample so far: serve them, and check on fresh ones.
@@ -359,12 +362,16 @@ class Problem:
         self._tree = cKDTree(candidates)
 
     @classmethod
-    def make(cls, shape, samples, packing=None, seed=0, backend=None, device=None) -> Problem:
+    def make(cls, shape, samples, packing=None, seed=0, backend=None, device=None, compiled=False) -> Problem:
+        """Samples and candidates of ``shape``; with ``compiled``, its distances and gradients run
+        on the backend's compiled kernels where it has float64 ones (:class:`CompiledQueries`)."""
         from .protosphere import pack
 
         rng = np.random.default_rng(seed)
         if packing is None:
             packing = pack(shape, n=1, mode="fast", seed=seed, backend=backend, device=device, progress=False)
+        if compiled:
+            shape = CompiledQueries.where_it_pays(shape, backend, device)
         cells = sample_cells(shape)
         points, normals = shape_samples(shape, samples, rng, cells)
         candidates, clearances = _candidates(shape, packing, points[:samples], normals[:samples], rng)
@@ -432,6 +439,51 @@ class Problem:
         on_boundary = np.any(normals != 0, axis=1)
         near, near_normals = _around(self.shape, points[on_boundary], points[~on_boundary], self.spacing, self.rng)
         return self.serve(None, centers, radii, clearance, inner, limit, seam, near, near_normals)
+
+
+class CompiledQueries:
+    """A shape whose distance and gradient run on a backend's compiled float64 kernels, the ones
+    its packing loops evaluate (a CSG tree as a tape, a plug-in's kernel): a covering asks for
+    millions of them, which the shape's own NumPy code answers several times slower. Every other
+    attribute is the shape's."""
+
+    def __init__(self, shape, backend):
+        self.shape, self.backend = shape, backend
+
+    @classmethod
+    def where_it_pays(cls, shape, backend=None, device=None):
+        """``shape`` on ``backend``'s kernels, or ``shape`` itself: for meshes and outlines (their own
+        queries are compiled already), the NumPy backend, and float32 precision."""
+        from .backends import get_backend
+
+        if exactly_sampled(shape):
+            return shape
+        engine = get_backend(backend, device, shape=shape)
+        if engine.name == "numpy" or getattr(engine, "precision", "float64") != "float64":
+            return shape
+        return cls(shape, engine)
+
+    def __getattr__(self, name):
+        return getattr(self.shape, name)
+
+    def __repr__(self) -> str:
+        return repr(self.shape)
+
+    def _distance(self, points):
+        """(n,) float64 signed distances of ``points`` (n, d)."""
+        points = np.ascontiguousarray(points, dtype=np.float64)
+        return self.backend.distance(self.shape, points) if len(points) else np.zeros(0)
+
+    def _distance_and_gradient(self, points):
+        """(n,) signed distances and (n, d) gradients: the free space without spheres is the
+        clearance ``-f`` and its direction ``-grad f``."""
+        points = np.ascontiguousarray(points, dtype=np.float64)
+        if not len(points):
+            return np.zeros(0), np.zeros((0, self.shape.dim))
+        dim = self.shape.dim
+        clearance, away = self.backend.free_space(self.shape, points, np.zeros((0, dim)), np.zeros(0),
+                                                  np.zeros((len(points), 0), dtype=np.int64))
+        return -clearance, -away
 
 
 def _check_request(n, protrusion, samples, check_samples):

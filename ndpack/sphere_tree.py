@@ -218,7 +218,7 @@ def covering_tree(shape, branching: int = 8, depth: int = 3, *, samples: int = 2
         raise ParameterError(f"depth must be a positive integer, got {depth!r}")
     shape = as_oracle(shape)
     check_packable(shape)
-    problem = Problem.make(shape, samples, packing, seed, backend, device)
+    problem = Problem.make(shape, samples, packing, seed, backend, device, compiled=True)
     regions = [np.arange(len(problem.points))]
     centers, radii, clearances, parents = [], [], [], []
     for level in range(depth):

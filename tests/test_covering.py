@@ -233,3 +233,23 @@ def test_open_mesh_covering_says_so_and_a_saved_covering_verifies_as_one(tmp_pat
     assert "NOT COVERED" in capsys.readouterr().out
     assert main(["info", str(out)]) == 0
     assert "a covering" in capsys.readouterr().out
+
+
+def test_compiled_queries_answer_as_the_shape_does():
+    from ndpack.covering import CompiledQueries
+
+    part = nd.Box([0, 0, 0], [1, 2, 0.5]) - nd.Ball([1, 2, 0.5], 0.4) | nd.Capsule([0, 0, 0], [1, 0, 0], 0.2)
+    compiled = CompiledQueries.where_it_pays(part, backend="numba")
+    assert isinstance(compiled, CompiledQueries) and compiled.bounds is part.bounds
+    points = part.bounds[0] + np.ptp(part.bounds, axis=0) * np.random.default_rng(4).random((5000, 3))
+    distance, gradient = compiled._distance_and_gradient(points)
+    reference, reference_gradient = part._distance_and_gradient(points)
+    assert np.allclose(compiled._distance(points), reference, rtol=0, atol=1e-12)
+    assert np.allclose(distance, reference, rtol=0, atol=1e-12)
+    # Finite differences on one side, analytic on the other: equal but where the gradient jumps.
+    assert np.mean(np.linalg.norm(gradient - reference_gradient, axis=1) < 1e-6) > 0.99
+    # Meshes answer with their own compiled queries, and the NumPy backend is the shape itself.
+    capsule = trimesh.creation.capsule(height=0.3, radius=0.08)
+    mesh = nd.TriangleMesh(capsule.vertices, capsule.faces)
+    assert CompiledQueries.where_it_pays(mesh, backend="numba") is mesh
+    assert CompiledQueries.where_it_pays(part, backend="numpy") is part
