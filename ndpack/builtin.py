@@ -75,6 +75,21 @@ def registered() -> dict:
     return shapes
 
 
+def _parameters(factory) -> dict | None:
+    """The keyword parameters a shape factory takes -> their defaults (None where required);
+    None if it takes any keyword or its signature cannot be read."""
+    import inspect
+
+    try:
+        parameters = list(inspect.signature(factory).parameters.values())
+    except (TypeError, ValueError):
+        return None
+    if any(p.kind is p.VAR_KEYWORD for p in parameters):
+        return None
+    return {p.name: None if p.default is p.empty else p.default for p in parameters
+            if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
+
+
 def from_spec(spec: str):
     """Build a named shape from ``name[:key=value,...]``, e.g. ``box:dim=4``."""
     name, _, arguments = spec.partition(":")
@@ -100,10 +115,16 @@ def from_spec(spec: str):
         keywords[key.strip()] = int(number) if number.is_integer() and key.strip() == "dim" else number
     if "dim" in keywords and keywords["dim"] < 1:
         raise ShapeError(f"dim must be a positive integer in {spec!r}")
+    accepted = _parameters(factory)
+    unknown = [key for key in keywords if accepted is not None and key not in accepted]
+    if unknown:
+        takes = ", ".join(f"{key}={default}" if default is not None else key for key, default in accepted.items())
+        raise ShapeError(f"shape {name!r} does not take {', '.join(unknown)}; it takes {takes or 'no parameters'}"
+                         + (f" (e.g. {name}:{next(iter(accepted))}=...)" if accepted else ""))
     try:
         shape = factory(**keywords)
-    except TypeError:
-        raise ShapeError(f"shape {name!r} does not take {', '.join(keywords)}") from None
+    except TypeError as error:
+        raise ShapeError(f"shape {name!r} refused {', '.join(keywords)}: {error}") from None
     from .oracle import Oracle
 
     if not isinstance(shape, Oracle):

@@ -14,6 +14,7 @@ import re
 import sys
 import tempfile
 import time
+import warnings
 from pathlib import Path
 
 from .errors import KEPT_IN_ERROR, InvalidPackingError, NdpackError, ParameterError
@@ -298,11 +299,26 @@ def _parser() -> argparse.ArgumentParser:
 
 
 # ---------------------------------------------------------------------------------------- pack
+#: What each ``stop_reason`` means, as ``ndpack pack`` prints it.
+STOP_REASONS = {
+    "count": "the count asked for", "fill": "the fill asked for reached", "time": "the time budget spent",
+    "min_radius": "no sphere of the least radius fits", "no_room": "no room left",
+    "callback": "stopped by the callback",
+    "interrupted": "interrupted (Ctrl-C): what was packed so far",
+}
+
+
+def _plus_minus(error: float) -> str:
+    """`` +- error`` with the digits it has (a Monte Carlo volume's standard error)."""
+    return f" +- {error:.4f}" if error >= 5e-5 else f" +- {error:.1e}"
+
+
 def _pack(args) -> int:
     from .packing import repair_summary
     from .protosphere import pack
     from .sources import describe, load_shape
 
+    called = time.perf_counter()
     source = args.shape
     if args.dim is not None:
         source += ("," if ":" in source else ":") + f"dim={args.dim}"
@@ -340,15 +356,17 @@ def _pack(args) -> int:
     packing.params["source"] = describe(source)
     report = packing.verify()
     print(f"shape:    {args.shape} -> {shape!r}")
-    print(f"spheres:  {len(packing)} (stopped by {packing.stop_reason})")
-    error = f" +- {packing.fill_error:.4f}" if packing.volume_error else ""
-    print(f"fill:     {packing.fill:.4f}{error}")
-    print(f"time:     {elapsed:.2f} s ({packing.params['backend']} backend)")
+    print(f"spheres:  {len(packing)} ({STOP_REASONS.get(packing.stop_reason, packing.stop_reason)})")
+    print(f"fill:     {packing.fill:.4f}{_plus_minus(packing.fill_error) if packing.volume_error else ''}")
     print(f"verified: {report.summary()}")
     if packing.repair:
         print(f"REPAIRED: {repair_summary(packing.repair)}")
     if args.output:
         print(f"saved:    {_save_or_keep(packing, args.output, args.format, options)}")
+    else:
+        print("saved:    nothing (give -o PATH to keep the spheres)")
+    print(f"time:     {elapsed:.2f} s packing ({packing.params['backend']} backend), "
+          f"{time.perf_counter() - called:.2f} s in all (loading, checking, saving)")
     if packing.stop_reason == "interrupted":
         print("ndpack: interrupted; " + ("kept what was packed" if args.output else "nothing saved (no --output)"),
               file=sys.stderr)
@@ -625,9 +643,9 @@ def _info(args) -> int:
               "`ndpack verify` checks that they cover it)")
     else:
         print(f"spheres:    {len(packing)} in {packing.dim}-D, {len(packing.stats.count)} rounds, "
-              f"stopped by {packing.stop_reason or '-'}")
+              f"{STOP_REASONS.get(packing.stop_reason, packing.stop_reason or '-')}")
     if np.isfinite(packing.volume) and not covering:
-        error = f" +- {packing.fill_error:.4f}" if packing.volume_error else ""
+        error = _plus_minus(packing.fill_error) if packing.volume_error else ""
         print(f"fill:       {packing.fill:.6f}{error} of volume {packing.volume:.6g}")
     problem = None if covering else volume_problem(packing)
     if problem:
@@ -707,6 +725,25 @@ def _join_negative_lists(argv: list[str]) -> list[str]:
 def main(argv=None) -> int:
     argv = _join_negative_lists(sys.argv[1:] if argv is None else list(argv))
     args = _parser().parse_args(argv)
+    return _run(args)
+
+
+def console() -> int:
+    """The ``ndpack`` program: :func:`main`, with warnings printed as one line each (called in
+    Python, :func:`main` leaves warnings to the caller's filters)."""
+    with warnings.catch_warnings():
+        warnings.showwarning = _warn_in_one_line
+        return main()
+
+
+def _warn_in_one_line(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning as one line without a source path, its advice in the CLI's options where the CLI
+    has them (``holes='cap'`` -> ``--holes cap``)."""
+    text = re.sub(r"\bholes='(\w+)'", r"--holes \1", _one_line(message))
+    print(f"ndpack: warning: {text}", file=sys.stderr)
+
+
+def _run(args) -> int:
     try:
         return COMMANDS[args.command](args)
     except NdpackError as error:
@@ -729,4 +766,4 @@ def _one_line(error) -> str:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(console())

@@ -8,7 +8,8 @@ csv       .csv              any   metadata (first line), spheres and rounds
 json      .json             any   everything, as plain JSON
 ply       .ply              1-3   spheres and rounds (one point per sphere), metadata as a comment
 vtp       .vtp              1-3   spheres as VTK points with radius, diameter and round (ParaView)
-mesh      .obj .stl .glb    3     an icosphere per sphere: centres and radii (float32 in STL, GLB)
+mesh      .obj .stl .glb    3     an icosphere per sphere: centres and radii (STL, GLB: float32, radii
+                                  shrunk by its rounding, so that the spheres read back verify)
 sph       .sph              3     spheres as a 2-level sphere tree (sphere-tree toolkit)
 curobo    .json .yml .yaml  3     spheres as cuRobo ``collision_spheres`` of one link (JSON or YAML)
 lammps    .data             2-3   spheres, a density and a box: LAMMPS ``read_data``, atom_style sphere
@@ -750,13 +751,43 @@ def _write_mesh(packing: Packing, path: Path, subdivisions: int = 1) -> None:
     _require_dim(packing.dim, range(3, 4), "a sphere mesh (.obj, .stl, .glb)")
     if not len(packing):
         raise NdpackError("an empty packing makes no sphere mesh (a mesh file with no triangles)")
-    mesh = sphere_mesh(packing.centers, packing.radii, subdivisions)
-    if path.suffix.lower() == ".obj":
+    float32 = path.suffix.lower() != ".obj"
+    radii = _float32_safe_radii(packing.centers, packing.radii, subdivisions) if float32 else packing.radii
+    mesh = sphere_mesh(packing.centers, radii, subdivisions)
+    if not float32:
         # 17 decimals: OBJ keeps float64 to about 1e-17; STL and GLB store float32.
         header = f"ndpack: {len(packing)} icospheres of {20 * 4**subdivisions} triangles"
         mesh.export(path, file_type="obj", include_normals=False, digits=17, header=header)
     else:
         mesh.export(path, file_type=path.suffix.lower()[1:])
+
+
+def _float32_safe_radii(centers, radii, subdivisions: int) -> np.ndarray:
+    """Radii to write in a float32 mesh (STL, GLB) so that the spheres read back from its rounded
+    vertices (as :func:`spheres_from_mesh` recovers them) lie inside the given ones: a packing's
+    file then verifies as the packing does. Each radius shrinks by about the float32 rounding of
+    its coordinates (1e-7 of them), found by rounding the vertices as the writer will."""
+    centers = np.asarray(centers, dtype=np.float64)
+    radii = np.asarray(radii, dtype=np.float64)
+    # float32's spacing at each sphere's largest coordinate: the step its vertices round to.
+    step = np.spacing(np.float32(np.abs(centers).max(axis=1) + radii)).astype(np.float64)
+    written = radii.copy()
+    for _ in range(8):
+        vertices = sphere_mesh(centers, written, subdivisions).vertices
+        stored = vertices.astype(np.float32).astype(np.float64).reshape(len(radii), -1, 3)
+        read_centers = stored.mean(axis=1)
+        read_radii = np.linalg.norm(stored - read_centers[:, None, :], axis=2).mean(axis=1)
+        excess = np.linalg.norm(read_centers - centers, axis=1) + read_radii - radii
+        beyond = excess > -step  # within a rounding step of reaching out: shrink it
+        if not beyond.any():
+            break
+        written[beyond] -= excess[beyond] + 2 * step[beyond]
+    else:
+        raise NdpackError("float32 cannot hold these spheres inside their own radii; save as .obj or .npz")
+    if np.any(written <= 0):
+        raise NdpackError(f"{int(np.count_nonzero(written <= 0))} spheres are smaller than float32 can place at "
+                          "their coordinates (STL and GLB store float32): save as .obj or .npz, which keep float64")
+    return written
 
 
 def _read_mesh(path: Path) -> Packing:

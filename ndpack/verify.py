@@ -78,10 +78,13 @@ class Verification:
             independent = (f"; independent check: {len(self.samples_outside)} spheres with points outside by the "
                            f"exact winding number ({SAMPLES_PER_SPHERE} points each)")
         where = " (centres only)" if self.centers_only else ""
+        # With fewer than two spheres there is no pair, and with none no poke-out: say so, not -inf.
+        poke = f"{self.worst_containment:.3g}" if np.isfinite(self.worst_containment) else "none, no sphere"
+        overlap = f"{self.worst_overlap:.3g}" if np.isfinite(self.worst_overlap) else "none, no pair"
         return (
             f"{verdict}: {self.count} spheres, {len(self.outside)} outside{where}, "
-            f"{len(self.overlapping)} overlapping pairs (worst poke-out {self.worst_containment:.3g}, "
-            f"worst overlap {self.worst_overlap:.3g}, tolerance {self.tol:.3g}){independent}"
+            f"{len(self.overlapping)} overlapping pairs (worst poke-out {poke}, "
+            f"worst overlap {overlap}, tolerance {self.tol:.3g}){independent}"
         )
 
     __str__ = summary

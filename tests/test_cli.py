@@ -14,10 +14,19 @@ def test_pack_a_builtin_shape_and_save(tmp_path):
     out = tmp_path / "box4.npz"
     result = run("pack", "box:dim=4", "-n", "30", "--grid", "6", "-o", str(out))
     assert result.returncode == 0, result.stderr
-    assert "spheres:  30" in result.stdout and "verified: valid" in result.stdout
+    assert "spheres:  30 (the count asked for)" in result.stdout and "verified: valid" in result.stdout
+    assert f"saved:    {out}" in result.stdout and "s in all" in result.stdout
     packing = nd.Packing.load(out)
     assert len(packing) == 30 and packing.dim == 4
     assert packing.verify(nd.Box([0] * 4, [1] * 4)).ok
+    # Without -o nothing is written, and the summary says so.
+    unsaved = run("pack", "box:dim=2", "-n", "5", "--grid", "6")
+    assert unsaved.returncode == 0 and "saved:    nothing (give -o PATH" in unsaved.stdout
+
+
+def test_one_sphere_has_no_pair_and_says_so_not_minus_infinity():
+    report = nd.pack(nd.Ball([0, 0, 0], 1.0), n=1).verify()
+    assert report.ok and "-inf" not in report.summary() and "none, no pair" in report.summary()
 
 
 def test_bad_shape_spec_gives_one_line_and_nonzero_exit():
@@ -26,6 +35,11 @@ def test_bad_shape_spec_gives_one_line_and_nonzero_exit():
     assert result.stderr.strip().count("\n") == 0 and "unknown shape 'dodecahedron'" in result.stderr
     result = run("pack", "box:dim")
     assert result.returncode == 2 and "key=value" in result.stderr
+    # A parameter the shape does not take: named, with the ones it does take.
+    from ndpack.builtin import from_spec
+
+    with pytest.raises(nd.NdpackError, match=r"does not take size; it takes dim=3"):
+        from_spec("box:dim=3,size=2")
 
 
 def test_impossible_parameters_and_backend():
@@ -383,3 +397,17 @@ def test_an_open_mesh_file_is_capped_or_refused(tmp_path, capsys):
     with pytest.warns(nd.MeshWarning, match="open .1 hole"):
         assert main(["pack", str(path), "-n", "5", "--grid", "8", "-o", str(tmp_path / "default.npz"), "-q"]) == 0
     assert nd.Packing.load(tmp_path / "default.npz").params["holes"] == "cap"
+
+
+def test_warnings_are_one_line_without_paths_and_name_cli_options(tmp_path):
+    import trimesh
+
+    sphere = trimesh.creation.icosphere(subdivisions=2)
+    sphere.update_faces(np.flatnonzero(sphere.triangles_center[:, 2] < 0.85))  # a hole at the top
+    sphere.remove_unreferenced_vertices()
+    sphere.export(tmp_path / "open.obj")
+    result = run("pack", str(tmp_path / "open.obj"), "-n", "5", "--mode", "fast", "--grid", "8")
+    assert result.returncode == 0, result.stderr
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert lines and all(line.startswith("ndpack: warning: ") for line in lines)
+    assert "--holes cap" in result.stderr and "holes='cap'" not in result.stderr and ".py:" not in result.stderr

@@ -372,3 +372,32 @@ def test_enclosing_sphere_encloses_and_is_nearly_smallest():
     assert np.all(np.linalg.norm(centers - center, axis=1) + radii <= radius * (1 + 1e-12))
     middle = ((centers - radii[:, None]).min(axis=0) + (centers + radii[:, None]).max(axis=0)) / 2
     assert radius <= (np.linalg.norm(centers - middle, axis=1) + radii).max()
+
+
+# ---------------------------------------------------------------------------------- every file verifies
+PART = "import ndpack as nd\nshape = nd.Box([0, 0, 0], [1, 2, 0.5]) - nd.Ball([1, 2, 0.5], 0.4)\n"
+OUTLINE = "import ndpack as nd\nshape = nd.Box([0, 0], [2, 1]) - nd.Ball([0, 0], 0.5)\n"
+
+
+@pytest.fixture(scope="module")
+def part():
+    # Many spheres far from the origin's float32 exactness: 300, down to small radii.
+    return nd.pack(nd.Box([0, 0, 0], [1, 2, 0.5]) - nd.Ball([1, 2, 0.5], 0.4), 300, mode="fast", seed=0)
+
+
+WRITTEN = [(name, suffix) for name, fmt in formats.FORMATS.items() if fmt.read is not None for suffix in fmt.suffixes]
+
+
+@pytest.mark.parametrize("name, suffix", WRITTEN)
+def test_every_file_ndpack_writes_verifies(part, square, tmp_path, capsys, name, suffix):
+    from ndpack.cli import main
+
+    fmt = formats.FORMATS[name]
+    for packing, source in ((part, PART), (square, OUTLINE)):
+        if packing.dim not in formats._dims(fmt, suffix):
+            continue
+        script = tmp_path / f"shape{packing.dim}.py"
+        script.write_text(source)
+        path = formats.save(packing, tmp_path / f"spheres{packing.dim}{suffix}", format=name)
+        assert main(["verify", str(path), "--shape", str(script)]) == 0, capsys.readouterr().out
+        assert "valid" in capsys.readouterr().out
