@@ -152,6 +152,10 @@ def _option(text: str) -> tuple:
 HOLES_HELP = "an open mesh file: cap closes each hole with a fan of triangles (the default, with a warning), refuse exits"
 HOLES_REUSE = "; default: what the packing records"
 HOLE_CHOICES = ("cap", "refuse")
+#: The help of --sign, which pack, cover, verify and render share.
+SIGN_HELP = ("a mesh file: how inside is told; auto (the default) takes pseudo-normals, or the winding number "
+             "for a surface that crosses itself or is open (slower, and said in a note)")
+SIGN_CHOICES = ("auto", "pseudonormal", "winding")
 
 
 def _positive_int(text: str) -> int:
@@ -202,6 +206,7 @@ def _parser() -> argparse.ArgumentParser:
                       help="built-in spec, mesh file, .py script or module:function (default: demo)")
     pack.add_argument("--dim", type=int, help="dimension of a built-in shape (same as :dim=)")
     pack.add_argument("--holes", choices=HOLE_CHOICES, help=HOLES_HELP)
+    pack.add_argument("--sign", choices=SIGN_CHOICES, help=SIGN_HELP)
     pack.add_argument("-n", "--count", type=int, default=1000, help="number of spheres (default 1000)")
     pack.add_argument("-o", "--output", help="write the packing here; the suffix picks the format")
     pack.add_argument("--format", help="the output format where the suffix does not say (e.g. curobo, medial)")
@@ -238,6 +243,7 @@ def _parser() -> argparse.ArgumentParser:
     cover.add_argument("shape", help="built-in spec, mesh file, .py script, module:function, or a .urdf file")
     cover.add_argument("--dim", type=int, help="dimension of a built-in shape (same as :dim=)")
     cover.add_argument("--holes", choices=HOLE_CHOICES, help=HOLES_HELP + " (for a URDF: its meshes)")
+    cover.add_argument("--sign", choices=SIGN_CHOICES, help=SIGN_HELP)
     how = cover.add_mutually_exclusive_group(required=True)
     how.add_argument("-n", "--count", type=_positive_int, help="at most this many spheres (per link for a URDF)")
     how.add_argument("--protrusion", type=_share, metavar="SHARE",
@@ -268,6 +274,7 @@ def _parser() -> argparse.ArgumentParser:
     verify.add_argument("--shape", help="the shape to check against (default: the one the file records)")
     verify.add_argument("--tol", type=_nonnegative, help="overlap and containment tolerance, >= 0 (default: ndpack's)")
     verify.add_argument("--holes", choices=HOLE_CHOICES, help=HOLES_HELP + HOLES_REUSE)
+    verify.add_argument("--sign", choices=SIGN_CHOICES, help=SIGN_HELP + HOLES_REUSE)
     verify.add_argument("--independent", action="store_true",
                         help="a mesh: also check 48 points on each sphere by the exact winding number, summed "
                         "over every triangle (slow: points x triangles)")
@@ -288,6 +295,7 @@ def _parser() -> argparse.ArgumentParser:
     render.add_argument("--clip", type=_numbers, help="px,py,pz,nx,ny,nz: drop spheres beyond this plane")
     render.add_argument("--shape", help="the shape whose outline a slice draws (default: the recorded one)")
     render.add_argument("--holes", choices=HOLE_CHOICES, help=HOLES_HELP + HOLES_REUSE)
+    render.add_argument("--sign", choices=SIGN_CHOICES, help=SIGN_HELP + HOLES_REUSE)
     render.add_argument("--trust-source", action="store_true",
                         help="run the script or module the file records as its shape (only for files you trust)")
 
@@ -316,13 +324,14 @@ def _plus_minus(error: float) -> str:
 def _pack(args) -> int:
     from .packing import repair_summary
     from .protosphere import pack
+    from .shapes.mesh import mesh_notes
     from .sources import describe, load_shape
 
     called = time.perf_counter()
     source = args.shape
     if args.dim is not None:
         source += ("," if ":" in source else ":") + f"dim={args.dim}"
-    shape = load_shape(source, args.holes)
+    shape = load_shape(source, args.holes, args.sign)
     if args.periodic is not None:
         from .shapes.periodic import Periodic
 
@@ -354,8 +363,12 @@ def _pack(args) -> int:
     )
     elapsed = time.perf_counter() - started
     packing.params["source"] = describe(source)
+    if args.sign is not None:  # verify and render reload the mesh the same way
+        packing.params["sign"] = args.sign
     report = packing.verify()
     print(f"shape:    {args.shape} -> {shape!r}")
+    for note in mesh_notes(shape):
+        print(f"note:     {note}")
     print(f"spheres:  {len(packing)} ({STOP_REASONS.get(packing.stop_reason, packing.stop_reason)})")
     print(f"fill:     {packing.fill:.4f}{_plus_minus(packing.fill_error) if packing.volume_error else ''}")
     print(f"verified: {report.summary()}")
@@ -441,7 +454,7 @@ def _cover(args) -> int:
     source = args.shape
     if args.dim is not None:
         source += ("," if ":" in source else ":") + f"dim={args.dim}"
-    shape = load_shape(source, args.holes)
+    shape = load_shape(source, args.holes, args.sign)
     options = dict(args.option)
     if args.output:
         _check_output(args.output, args.format, shape.dim, options)
@@ -467,6 +480,8 @@ def _cover(args) -> int:
     if args.output:
         spheres = covering.as_packing()
         spheres.params["source"] = describe(source)  # so that `ndpack verify` finds the shape
+        if args.sign is not None:
+            spheres.params["sign"] = args.sign
         print(f"saved:    {_save_or_keep(spheres, args.output, args.format, options)}")
     return 0 if covering.report.covered else 1
 
@@ -479,6 +494,8 @@ def _cover_robot(args) -> int:
                              "(-o DIR): a URDF, a cuRobo .yml and report.json")
     if args.dim is not None:
         raise ParameterError("--dim applies to a built-in shape, not to a URDF: leave it out")
+    if args.sign is not None:
+        raise ParameterError("--sign applies to one mesh file; a URDF's meshes take the automatic sign: leave it out")
     if not args.output:
         raise ParameterError("give the output folder with -o DIR: a URDF's spheres are written as "
                              "<robot>_spheres.urdf, <robot>_spheres.yml and report.json")
@@ -502,18 +519,19 @@ def _load(path: str):
     return load(path)
 
 
-def _recorded_shape(packing, override: str | None, required: bool, trust: bool = False, holes: str | None = None):
+def _recorded_shape(packing, override: str | None, required: bool, trust: bool = False, holes: str | None = None,
+                    sign: str | None = None):
     """The shape given on the command line, else the one the packing records (``params["source"]``).
 
     A recorded source that would run code (a script, a module, a package's plug-in) is used
     only with ``trust``: otherwise a crafted file could run anything on ``ndpack verify``.
     Where the shape is not ``required`` such a source is skipped with a note on stderr.
     A recorded mesh file is loaded with the packing's recorded ``holes`` (what inside meant when
-    it was packed) unless ``holes`` is given."""
+    it was packed) unless ``holes`` is given, and so with ``sign``."""
     from .sources import code_in, is_mesh_file, load_shape
 
     if override:
-        return _with_recorded_period(load_shape(override, holes), packing)
+        return _with_recorded_period(load_shape(override, holes, sign), packing)
     source = packing.params.get("source")
     if source is None:
         if required:
@@ -528,9 +546,10 @@ def _recorded_shape(packing, override: str | None, required: bool, trust: bool =
         print(f"ndpack: drawn without the outline: the packing records its shape as {code}; {advice}",
               file=sys.stderr)
         return None
-    if holes is None and is_mesh_file(str(source)):
-        holes = _recorded_holes(packing)
-    return _with_recorded_period(load_shape(str(source), holes), packing)
+    if is_mesh_file(str(source)):
+        holes = _recorded_holes(packing) if holes is None else holes
+        sign = _recorded_sign(packing) if sign is None else sign
+    return _with_recorded_period(load_shape(str(source), holes, sign), packing)
 
 
 def _with_recorded_period(shape, packing):
@@ -556,12 +575,22 @@ def _recorded_holes(packing) -> str | None:
     return holes
 
 
+def _recorded_sign(packing) -> str | None:
+    """The packing's ``params["sign"]``, checked: a file may hold anything."""
+    sign = packing.params.get("sign")
+    if sign is not None and sign not in SIGN_CHOICES:
+        raise NdpackError(f"this packing records sign={sign!r}, which is none of {', '.join(SIGN_CHOICES)}: "
+                          "pass --sign")
+    return sign
+
+
 def _verify(args) -> int:
     from .consistency import volume_problem
     from .verify import verify
 
     packing = _load(args.packing)
-    shape = _recorded_shape(packing, args.shape, required=True, trust=args.trust_source, holes=args.holes)
+    shape = _recorded_shape(packing, args.shape, required=True, trust=args.trust_source, holes=args.holes,
+                            sign=args.sign)
     if "covering" in packing.params:
         return _verify_covering(args, packing, shape)
     report = verify(packing, shape, args.tol, independent=args.independent)
@@ -614,7 +643,8 @@ def _render(args) -> int:
     elif draws_circles:
         _refuse({name: options[name] for name in ("size", "view", "clip") if name in options},
                 "a picture of circles (2-D, a slice, .svg or .pdf)")
-        shape = _recorded_shape(packing, args.shape, required=False, trust=args.trust_source, holes=args.holes)
+        shape = _recorded_shape(packing, args.shape, required=False, trust=args.trust_source, holes=args.holes,
+                                sign=args.sign)
         if shape is not None:
             options["shape"] = shape
     print(f"wrote {picture(packing, output, kind=kind, **options)}")

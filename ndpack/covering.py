@@ -59,7 +59,7 @@ from .boundary import exactly_sampled, project, sample_cells, samples as shape_s
 from .errors import ParameterError
 from .inside_cells import InsideCells
 from .oracle import Oracle, check_packable
-from .shapes.mesh import recorded_holes
+from .shapes.mesh import mesh_notes, recorded_holes
 
 #: Boundary samples the cover is made on (the inside gets a quarter as many more).
 DEFAULT_SAMPLES = 20_000
@@ -328,7 +328,7 @@ def cover(
     params = {"n": None if n is None else int(n), "protrusion": None if protrusion is None else float(protrusion),
               "tolerance": tolerance, "samples": int(samples), "seed": int(seed),
               "candidates": len(problem.candidates), "passes": passes, "checks": checks,
-              "holes": recorded_holes(shape), "notes": _mesh_notes(shape), "seconds": time.perf_counter() - started}
+              "holes": recorded_holes(shape), "notes": mesh_notes(shape), "seconds": time.perf_counter() - started}
     return Covering(centers, radii, _protrusions(shape, centers, radii), report, params, shape)
 
 
@@ -774,21 +774,6 @@ def _refine(points, centers, radii, clearance, slack):
     np.maximum.at(needed, covering[served], lengths)
     keep = np.isfinite(needed)
     return np.minimum(radii, needed + slack), keep
-
-
-def _mesh_notes(shape) -> list[str]:
-    """What was made of the meshes in ``shape``'s tree: capped holes and the mesh's own notes."""
-    from .shapes.mesh import TriangleMesh
-    from .shapes.plugin import tree
-
-    notes = []
-    for node in tree(shape):
-        if isinstance(node, TriangleMesh):
-            if node.holes:
-                notes.append(f"{node!r} is open: {node.holes} hole(s) closed by caps, and the spheres cover the "
-                             "capped solid")
-            notes.extend(f"{node!r}: {note}" for note in node.notes)
-    return notes
 
 
 def _protrusions(shape, centers, radii) -> np.ndarray:

@@ -30,7 +30,7 @@ from .errors import ShapeError
 MESH_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".3mf", ".dae")
 
 
-def load_shape(source: str, holes: str | None = None):
+def load_shape(source: str, holes: str | None = None, sign: str | None = None):
     """The shape a source string names; see the module's table.
 
     Parameters
@@ -39,6 +39,9 @@ def load_shape(source: str, holes: str | None = None):
     holes : {"cap", "refuse"}, optional
         For a mesh file: what to do with an open mesh (:class:`~ndpack.TriangleMesh`); refused
         for other sources, whose code builds the shape.
+    sign : {"auto", "pseudonormal", "winding"}, optional
+        For a mesh file: how inside is told (:class:`~ndpack.TriangleMesh`); refused for other
+        sources.
 
     Returns
     -------
@@ -54,6 +57,9 @@ def load_shape(source: str, holes: str | None = None):
     if holes is not None and kind != "mesh":
         raise ShapeError(f"--holes applies to a mesh file, and {text} is not one: leave it out "
                          "(a script passes holes= to ndpack.TriangleMesh itself)")
+    if sign is not None and kind != "mesh":
+        raise ShapeError(f"--sign applies to a mesh file, and {text} is not one: leave it out "
+                         "(a script passes sign= to ndpack.TriangleMesh itself)")
     path = Path(text).expanduser()
     if path.is_dir():
         raise ShapeError(f"{text} is a folder, not a mesh file or a script")
@@ -64,7 +70,7 @@ def load_shape(source: str, holes: str | None = None):
     if kind == "mesh":
         from .shapes.mesh import TriangleMesh
 
-        return TriangleMesh.load(path, holes=holes)
+        return TriangleMesh.load(path, sign=sign or "auto", holes=holes)
     if kind == "spec":
         return from_spec(text)
     name, _, attribute = text.partition(":")

@@ -411,3 +411,22 @@ def test_warnings_are_one_line_without_paths_and_name_cli_options(tmp_path):
     lines = [line for line in result.stderr.splitlines() if line.strip()]
     assert lines and all(line.startswith("ndpack: warning: ") for line in lines)
     assert "--holes cap" in result.stderr and "holes='cap'" not in result.stderr and ".py:" not in result.stderr
+
+
+def test_sign_option_is_recorded_and_a_crossing_mesh_says_how_inside_is_told(tmp_path):
+    import trimesh
+
+    first, second = trimesh.creation.box(extents=[1, 1, 1]), trimesh.creation.box(extents=[1, 1, 1])
+    second.apply_translation([0.5, 0.3, 0.2])
+    trimesh.util.concatenate([first, second]).export(tmp_path / "crossing.obj")  # two boxes through each other
+    result = run("pack", str(tmp_path / "crossing.obj"), "-n", "5", "--mode", "fast", "--grid", "8")
+    assert result.returncode == 0, result.stderr
+    assert "note:" in result.stdout and "crosses itself" in result.stdout and "winding number" in result.stdout
+    out = tmp_path / "forced.npz"
+    result = run("pack", str(tmp_path / "crossing.obj"), "-n", "5", "--mode", "fast", "--grid", "8",
+                 "--sign", "winding", "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    assert nd.Packing.load(out).params["sign"] == "winding"
+    assert run("verify", str(out)).returncode == 0
+    refused = run("pack", "box:dim=3", "-n", "3", "--sign", "winding")
+    assert refused.returncode == 2 and "--sign applies to a mesh file" in refused.stderr

@@ -260,6 +260,20 @@ class TriangleMesh(Oracle):
         return f"TriangleMesh({what}{self.n_triangles} triangles)"
 
 
+def mesh_notes(shape) -> list[str]:
+    """What was made of the meshes in ``shape``'s tree before use: capped holes, welded vertices,
+    the winding number deciding inside (each mesh's :attr:`TriangleMesh.notes`, named)."""
+    from .plugin import tree
+
+    notes = []
+    for node in tree(shape):
+        if isinstance(node, TriangleMesh):
+            if node.holes:
+                notes.append(f"{node!r} is open: {node.holes} hole(s) closed by caps; the solid is the capped one")
+            notes.extend(f"{node!r}: {note}" for note in node.notes)
+    return notes
+
+
 def recorded_holes(shape) -> str | None:
     """What a packing of ``shape`` records as ``params["holes"]``: ``"cap"`` where a mesh of its
     tree had its holes capped or was loaded with ``holes="cap"``, else ``"refuse"`` where one was
