@@ -5,7 +5,8 @@ the interior samples make sure that the union holds the inside too. Meshes and p
 sampled exactly on their triangles and edges (uniform by area and length); any other shape, of
 any dimension, by projecting points of a band around its boundary onto the zero set along the
 gradient (``x - f(x) grad f(x)``, repeated), which lands on the boundary wherever the distance
-is exact and converges like sphere tracing where it is a lower bound.
+is exact and converges like sphere tracing where it is a lower bound. The inside is drawn in the
+cells of :mod:`ndpack.inside_cells` known to be inside or on the boundary.
 """
 
 from __future__ import annotations
@@ -67,9 +68,9 @@ def _band(shape):
     return BAND * float(np.max(np.asarray(upper) - np.asarray(lower)))
 
 
-def samples(shape: Oracle, count: int, rng: np.random.Generator, cells=None) -> tuple[np.ndarray, np.ndarray]:
-    """``count`` boundary samples, then a quarter as many inside (drawn in ``cells``, the shape's
-    :class:`~ndpack.inside_cells.InsideCells`, when given: far fewer distances).
+def samples(shape: Oracle, count: int, rng: np.random.Generator, cells) -> tuple[np.ndarray, np.ndarray]:
+    """``count`` boundary samples, then a quarter as many inside, drawn in ``cells`` (the shape's
+    :class:`~ndpack.inside_cells.InsideCells` from :func:`sample_cells`: far fewer distances).
 
     Returns
     -------
@@ -78,8 +79,7 @@ def samples(shape: Oracle, count: int, rng: np.random.Generator, cells=None) -> 
         Outward normals on the boundary; zero rows for the interior points.
     """
     boundary, normals = boundary_samples(shape, count, rng, cells)
-    inside_count = max(count // 4, 1)
-    inside = interior_samples(shape, inside_count, rng) if cells is None else cells.interior(inside_count, rng)
+    inside = cells.interior(max(count // 4, 1), rng)
     return np.vstack([boundary, inside]), np.vstack([normals, np.zeros_like(inside)])
 
 
@@ -111,22 +111,6 @@ def project(shape: Oracle, points) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             break
         points[moving] -= distances[:, None] * gradients
     return points, normals, on
-
-
-def interior_samples(shape: Oracle, count: int, rng: np.random.Generator, tries: int = 200) -> np.ndarray:
-    """``count`` points uniform in the inside of ``shape``, (count, d) float64 (rejection in its bounds)."""
-    lower, upper = shape.bounds
-    found, total = [], 0
-    batch = max(4 * count, 1024)
-    for _ in range(tries):
-        points = lower + (upper - lower) * rng.random((batch, shape.dim))
-        inside = points[shape._distance(points) < 0]
-        found.append(inside)
-        total += len(inside)
-        if total >= count:
-            return np.vstack(found)[:count]
-    raise ShapeError(f"found only {total} of {count} points inside {shape!r} in {tries * batch} tries over its "
-                     "bounds: the shape is almost empty or far smaller than its bounds; tighten the bounds")
 
 
 def _mesh_samples(vertices, faces, count, rng):

@@ -106,20 +106,33 @@ def _periodic_axes(text: str):
         raise argparse.ArgumentTypeError(f"expected 'all' or axis numbers such as 0,1, got {text!r}") from None
 
 
-def _seed(text: str) -> int:
-    if not text.strip().isdigit():
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return int(text)
+def _integer_from(least: int):
+    """An argparse type: an integer of at least ``least``."""
+    def parse(text: str) -> int:
+        if not text.strip().isdigit() or int(text) < least:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {least}, got {text!r}")
+        return int(text)
+
+    return parse
 
 
-def _nonnegative(text: str) -> float:
+def _finite(text: str, positive: bool = False) -> float:
+    """A finite number >= 0 (> 0 where ``positive``)."""
     try:
         value = float(text)
     except ValueError:
         value = math.nan
-    if not (math.isfinite(value) and value >= 0):
-        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    if not (math.isfinite(value) and (value > 0 if positive else value >= 0)):
+        raise argparse.ArgumentTypeError(f"expected a finite number {'>' if positive else '>='} 0, got {text!r}")
     return value
+
+
+_seed, _positive_int = _integer_from(0), _integer_from(1)
+_nonnegative = _finite
+
+
+def _positive_float(text: str) -> float:
+    return _finite(text, positive=True)
 
 
 def _integers(text: str) -> tuple:
@@ -156,22 +169,6 @@ HOLE_CHOICES = ("cap", "refuse")
 SIGN_HELP = ("a mesh file: how inside is told; auto (the default) takes pseudo-normals, or the winding number "
              "for a surface that crosses itself or is open (slower, and said in a note)")
 SIGN_CHOICES = ("auto", "pseudonormal", "winding")
-
-
-def _positive_int(text: str) -> int:
-    if not text.strip().isdigit() or int(text) < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return int(text)
-
-
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
-    return value
 
 
 def _share(text: str) -> float:

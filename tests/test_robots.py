@@ -275,7 +275,7 @@ def test_report_json(robot):
     for name, entry in report["links"].items():
         covering = result.links[name]
         assert entry["status"] == "covered" and entry["covered"] is True
-        assert entry["spheres"] == len(covering) and isinstance(entry["seconds"], float)  # recorded; timed in bench/
+        assert entry["spheres"] == len(covering)
         assert entry["max_protrusion"] == covering.report.max_protrusion
         assert entry["relative_protrusion"] <= SHARE * (1 + 1e-6)
         assert entry["relative_protrusion"] == pytest.approx(entry["max_protrusion"] / entry["diagonal"])
