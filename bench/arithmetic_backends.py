@@ -22,7 +22,7 @@ import numpy as np
 import ndpack as nd
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import machine_info, write_json  # noqa: E402
+from _common import machine_info, write_json
 
 BOUNDS = [[-2.05, -2.05], [2.05, 2.05]]
 SPACING, RADIUS = 0.5, 0.2

@@ -89,24 +89,24 @@ def kmeans_pp(points, k, rng):
     """k-means++ seeding: each next centre is a sample drawn with probability proportional to its
     squared distance to the nearest centre so far. (k, d) float64."""
     n = len(points)
-    centres = np.empty((k, points.shape[1]))
+    centers = np.empty((k, points.shape[1]))
     first = int(rng.integers(n))
-    centres[0] = points[first]
+    centers[0] = points[first]
     nearest = ((points - points[first]) ** 2).sum(axis=1)
     tree = cKDTree(points)
     for i in range(1, k):
         total = np.cumsum(nearest)
         if total[-1] <= 0:  # every sample sits on a centre: the rest are duplicates of samples
-            centres[i:] = points[rng.integers(n, size=k - i)]
+            centers[i:] = points[rng.integers(n, size=k - i)]
             break
         j = min(int(np.searchsorted(total, rng.random() * total[-1], side="right")), n - 1)
-        centres[i] = points[j]
+        centers[i] = points[j]
         # Only samples nearer to the new centre than to every old one change; they lie within
         # the largest such distance of it.
         near = np.asarray(tree.query_ball_point(points[j], math.sqrt(nearest.max())), dtype=np.int64)
         if len(near):
             nearest[near] = np.minimum(nearest[near], ((points[near] - points[j]) ** 2).sum(axis=1))
-    return centres
+    return centers
 
 
 def kmeans(points, k, rng, iterations=LLOYD_ITERATIONS):
@@ -114,16 +114,16 @@ def kmeans(points, k, rng, iterations=LLOYD_ITERATIONS):
     returns the centroids (k, d) and each sample's cluster (n,), the labels of the last assignment
     and the centroids their means (an empty cluster keeps its centre)."""
     k = min(k, len(points))
-    centres = kmeans_pp(points, k, rng)
+    centers = kmeans_pp(points, k, rng)
     for _ in range(iterations):
-        _, labels = cKDTree(centres).query(points, workers=-1)
+        _, labels = cKDTree(centers).query(points, workers=-1)
         counts = np.bincount(labels, minlength=k)
         sums = np.stack([np.bincount(labels, weights=points[:, axis], minlength=k)
                          for axis in range(points.shape[1])], axis=1)
         filled = counts > 0
-        centres = centres.copy()
-        centres[filled] = sums[filled] / counts[filled, None]
-    return centres, labels
+        centers = centers.copy()
+        centers[filled] = sums[filled] / counts[filled, None]
+    return centers, labels
 
 
 def kmeans_covering(mesh, k, samples, seed=SEED, scipy_kmeans=False):
@@ -137,18 +137,18 @@ def kmeans_covering(mesh, k, samples, seed=SEED, scipy_kmeans=False):
     if scipy_kmeans:
         from scipy.cluster.vq import kmeans2
 
-        centres, labels = kmeans2(points, k, iter=LLOYD_ITERATIONS, minit="++", seed=rng)
+        centers, labels = kmeans2(points, k, iter=LLOYD_ITERATIONS, minit="++", seed=rng)
     else:
-        centres, labels = kmeans(points, k, rng)
-    radii = np.zeros(len(centres))
-    np.maximum.at(radii, labels, np.linalg.norm(points - centres[labels], axis=1))
-    used = np.bincount(labels, minlength=len(centres)) > 0
-    return centres[used], radii[used], count
+        centers, labels = kmeans(points, k, rng)
+    radii = np.zeros(len(centers))
+    np.maximum.at(radii, labels, np.linalg.norm(points - centers[labels], axis=1))
+    used = np.bincount(labels, minlength=len(centers)) > 0
+    return centers[used], radii[used], count
 
 
-def protrusion(mesh, centres, radii) -> float:
+def protrusion(mesh, centers, radii) -> float:
     """The largest ``r + f(c)`` over the spheres (0 for one inside): ``check_covering``'s ``max_protrusion``."""
-    return float(np.maximum(radii + mesh.distance(centres), 0.0).max(initial=0.0))
+    return float(np.maximum(radii + mesh.distance(centers), 0.0).max(initial=0.0))
 
 
 def search_count(mesh, tolerance, samples, max_k, precision, scipy_kmeans=False):
@@ -159,12 +159,12 @@ def search_count(mesh, tolerance, samples, max_k, precision, scipy_kmeans=False)
 
     def evaluate(k):
         started = time.perf_counter()
-        centres, radii, count = kmeans_covering(mesh, k, samples, scipy_kmeans=scipy_kmeans)
+        centers, radii, count = kmeans_covering(mesh, k, samples, scipy_kmeans=scipy_kmeans)
         seconds = time.perf_counter() - started
-        reach = protrusion(mesh, centres, radii)
+        reach = protrusion(mesh, centers, radii)
         history.append([int(k), len(radii), reach, round(seconds, 3)])
         print(f"    k-means k={k}: {len(radii)} spheres, protrusion {reach:.4g} ({seconds:.2f} s)", flush=True)
-        found["last"] = dict(centres=centres, radii=radii, seconds=seconds, samples=count)
+        found["last"] = dict(centers=centers, radii=radii, seconds=seconds, samples=count)
         if reach <= tolerance and k <= found.get("k", k):  # the smallest passing count's covering
             found["best"], found["k"] = found["last"], k
         return reach <= tolerance
@@ -213,8 +213,8 @@ def ndpack_row(mesh, diagonal, backend, args, **request) -> dict:
                 seconds_all=[round(t, 3) for t in times], **report_fields(covering.report, diagonal), params=params)
 
 
-def baseline_row(mesh, diagonal, centres, radii, seconds, args, **extra) -> dict:
-    report = nd.check_covering(mesh, centres, radii, samples=args.check_samples, seed=CHECK_SEED)
+def baseline_row(mesh, diagonal, centers, radii, seconds, args, **extra) -> dict:
+    report = nd.check_covering(mesh, centers, radii, samples=args.check_samples, seed=CHECK_SEED)
     return dict(method="k-means", spheres=len(radii), seconds=round(seconds, 3),
                 **report_fields(report, diagonal), **extra)
 
@@ -280,7 +280,7 @@ def warm_up(backend, args) -> dict:
     cow = load_mesh("cow")[0]
     for label, shape in (("csg_cold", part), ("mesh_cold", cow), ("mesh_warm", cow)):
         started = time.perf_counter()
-        nd.cover(shape, protrusion=0.02 * float(np.linalg.norm(np.ptp(shape.bounds, axis=0))), **small)
+        nd.cover(shape, protrusion=0.02 * shape.diagonal, **small)
         times[label] = round(time.perf_counter() - started, 3)
     return times
 
@@ -350,7 +350,7 @@ def main(argv=None) -> int:
 
     for name in args.meshes:
         mesh, load_seconds = load_mesh(name)
-        diagonal = float(np.linalg.norm(np.ptp(mesh.bounds, axis=0)))
+        diagonal = mesh.diagonal
         common = dict(mesh=Path(name).stem, triangles=len(mesh.faces), load_seconds=round(load_seconds, 3))
         for tol in args.tolerances:
             print(f"{name}: tolerance {tol:g} of the diagonal ({tol * diagonal:.4g})", flush=True)
@@ -370,11 +370,11 @@ def main(argv=None) -> int:
             add(dict(kind="count", k=k, **common, **ndpack_row(mesh, diagonal, args.backend, args, n=k)))
             if args.baseline:
                 started = time.perf_counter()
-                centres, radii, count = kmeans_covering(mesh, k, args.baseline_samples,
+                centers, radii, count = kmeans_covering(mesh, k, args.baseline_samples,
                                                         scipy_kmeans=args.scipy_kmeans)
                 seconds = time.perf_counter() - started
                 add(dict(kind="count", k=k, **common,
-                         **baseline_row(mesh, diagonal, centres, radii, seconds, args, samples=count)))
+                         **baseline_row(mesh, diagonal, centers, radii, seconds, args, samples=count)))
     print()
     print(markdown(results))
     return 0

@@ -27,7 +27,7 @@ import ndpack as nd
 out = {}
 for name in sys.argv[4:]:
     mesh = nd.TriangleMesh.load(f"{sys.argv[2]}/{name}.obj")
-    tolerance = 0.01 * float(np.linalg.norm(np.ptp(mesh.bounds, axis=0)))
+    tolerance = 0.01 * mesh.diagonal
     nd.cover(mesh, protrusion=tolerance, progress=False)
     times = []
     for _ in range(int(sys.argv[3])):

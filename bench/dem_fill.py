@@ -111,7 +111,7 @@ def main():
         row("log-normal median 0.06, sigma 0.25, by mass, periodic 4-D unit cell, solid fraction 0.4", backend,
             experiment, seconds, ks=round(grains.report(experiment).ks, 5), unplaced=experiment.params["unplaced"])
         if args.figure and backend == args.backends[0]:
-            from ndpack.plot import save_fill_figure
+            from ndpack.pictures import save_fill_figure
 
             save_fill_figure(experiment, args.figure, labels=["4-D periodic, log-normal by mass"])
 

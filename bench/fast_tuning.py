@@ -29,7 +29,7 @@ from ndpack import protosphere, rounds
 from ndpack.backends import prototypes
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import machine_info, write_json  # noqa: E402
+from _common import machine_info, write_json
 
 
 def count_steps(counter):

@@ -30,7 +30,7 @@ import numpy as np
 import ndpack as nd
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import load_average, machine_info, write_json  # noqa: E402
+from _common import load_average, machine_info, write_json
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -92,7 +92,7 @@ def run_case(name: str, d: int, n: int, seed: int, grid, args) -> dict:
     print(f"[{name}] packing {n} spheres in the unit {'square' if d == 2 else 'cube'}"
           f" (grid={grid or 'default'}) ...", flush=True)
     t0 = time.perf_counter()
-    p = nd.pack(shape, n=n, seed=seed, grid=grid, backend="numpy", progress=False)
+    p = nd.pack(shape, n=n, seed=seed, grid=grid, backend="numpy", mode="faithful", progress=False)
     wall = time.perf_counter() - t0
     ok = bool(p.verify().ok)
     count = np.asarray(p.stats.count)

@@ -15,7 +15,7 @@ nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader | 
 for item in "$@"; do
   case "$item" in
     tests)
-      timeout 300 python3 -m pytest -q -x -p no:cacheprovider tests/test_backends.py 2>&1 | tail -15 | tee "$OUT/tests.txt" ;;
+      timeout 300 python3 -m pytest -q -x -p no:cacheprovider tests/backends/test_backends.py 2>&1 | tail -15 | tee "$OUT/tests.txt" ;;
     profile)
       timeout 120 python3 bench/profile_rounds.py --backends warp numba-cuda numba --count 3000 2>&1 | tee "$OUT/profile.txt"
       timeout 120 python3 bench/profile_rounds.py --backends warp numba-cuda --count 3000 --kernels 2>&1 | tee -a "$OUT/profile.txt"

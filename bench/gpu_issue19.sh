@@ -23,7 +23,7 @@ case "${1:-start}" in
       --spheres 20000 --repeats 3 --shapes demo deep mesh --out "$OUT/tape_speed_h100.json" 2>&1 | grep -v "^Warp\|^Module" \
       | tee "$OUT/tape_speed.txt" ;;
   tests)
-    timeout 560 python3 -m pytest -q -p no:cacheprovider tests/test_backends.py tests/test_compile_cache.py \
+    timeout 560 python3 -m pytest -q -p no:cacheprovider tests/backends/test_backends.py tests/kernels/test_compile_cache.py \
       -k "numba-cuda or warp or cuda" 2>&1 | tail -15 | tee "$OUT/tests.txt" ;;
   *) echo "unknown part $1: start, speed or tests" >&2; exit 2 ;;
 esac

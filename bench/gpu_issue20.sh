@@ -63,7 +63,7 @@ case "${1:-time}" in
     timeout 280 python3 bench/profile_fast.py --backends warp numba-cuda --mesh /tmp/armadillo.obj --count 100000 \
       --sort tottime cumulative --top 45 2>&1 | grep -v "^Warp\|^Module" | tee "$OUT/profile_fast.txt" ;;
   tests)
-    timeout 570 python3 -m pytest -q -p no:cacheprovider tests/test_backends.py tests/test_scale.py tests/test_driver.py \
+    timeout 570 python3 -m pytest -q -p no:cacheprovider tests/backends/test_backends.py tests/test_scale.py tests/test_protosphere.py \
       -k "numba-cuda or warp or cuda or fast" 2>&1 | tail -15 | tee "$OUT/tests.txt" ;;
   *) echo "unknown part $1: time, profile, million, spread, deallocs, profile_fast or tests" >&2; exit 2 ;;
 esac

@@ -12,7 +12,7 @@ if ls .gpu3/*.whl >/dev/null 2>&1 && ! python3 -c "import igl, fcpw" 2>/dev/null
   python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --target /tmp/gpu-site .gpu3/*.whl
 fi
 nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader | tee "$OUT/gpu.txt"
-timeout 400 python3 -m pytest -q -x -p no:cacheprovider tests/test_backends.py -k mesh tests/test_mesh.py 2>&1 \
+timeout 400 python3 -m pytest -q -x -p no:cacheprovider tests/backends/test_backends.py -k mesh tests/shapes/test_mesh.py 2>&1 \
   | tail -15 | tee "$OUT/mesh_tests.txt"
 NUMBA_NUM_THREADS=16 timeout 400 python3 bench/mesh_queries.py --mesh "$MESH" --out "$OUT/mesh_queries_gpu.json" 2>&1 \
   | grep -v "^Warp\|^Module" | tee "$OUT/mesh_queries.txt"

@@ -14,7 +14,7 @@ nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader | 
 python3 -c "import numba, numba.cuda, warp; print('numba', numba.__version__, 'warp', warp.__version__)" 2>&1 \
   | tail -1 | tee -a "$OUT/gpu.txt"
 if [[ "${TESTS:-1}" == 1 ]]; then
-  timeout 300 python3 -m pytest -q -x -p no:cacheprovider tests/test_scale.py tests/test_backends.py -k "device or index" \
+  timeout 300 python3 -m pytest -q -x -p no:cacheprovider tests/test_scale.py tests/backends/test_backends.py -k "device or index" \
     2>&1 | tail -6 | tee "$OUT/scale_tests.txt"
 fi
 for backend in $BACKENDS; do

@@ -5,7 +5,7 @@ Each engine answers the same points (uniform in the mesh's box enlarged by 5%, s
 inside): the signed distance by its exact sign method for closed meshes (pseudo-normals, or
 fcpw's inside test). Repeats go round-robin over the engines, so a noisy neighbour slows them all
 alike; the table gives medians. Errors are against ndpack's float64 CPU answer, itself tested
-against libigl in ``tests/test_mesh.py``.
+against libigl in ``tests/shapes/test_mesh.py``.
 
     python bench/mesh_queries.py                               # armadillo, then subdivided once
     python bench/mesh_queries.py --points 50000 --repeats 3 --out bench/results/x.json

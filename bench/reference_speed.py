@@ -19,7 +19,7 @@ from pathlib import Path
 import ndpack as nd
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import load_average, machine_info, write_json  # noqa: E402
+from _common import load_average, machine_info, write_json
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -44,7 +44,7 @@ def main(argv=None) -> int:
         runs = []
         for seed in args.seeds:
             t0 = time.perf_counter()
-            p = nd.pack(shape, n=args.n, seed=seed, backend="numpy", progress=False)
+            p = nd.pack(shape, n=args.n, seed=seed, backend="numpy", mode="faithful", progress=False)
             wall = time.perf_counter() - t0
             runs.append({
                 "seed": seed,

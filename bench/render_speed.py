@@ -1,4 +1,4 @@
-"""How long a shaded 3-D picture takes (``ndpack.render.render``), up to a million spheres.
+"""How long a shaded 3-D picture takes (``ndpack.pictures.render``), up to a million spheres.
 
 A fast-mode packing of the unit cube is tiled into side-by-side copies (still disjoint) to reach
 each count without packing a million spheres first. Times are medians of ``--repeats`` after a
@@ -18,10 +18,10 @@ from pathlib import Path
 import numpy as np
 
 import ndpack as nd
-from ndpack.render import render
+from ndpack.pictures import render
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import machine_info, write_json  # noqa: E402
+from _common import machine_info, write_json
 
 ROOT = Path(__file__).resolve().parent.parent
 

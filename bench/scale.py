@@ -33,7 +33,7 @@ import numpy as np
 import ndpack as nd
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import machine_info, write_json  # noqa: E402
+from _common import machine_info, write_json
 
 ROOT = Path(__file__).resolve().parent.parent
 MESH = ROOT.parent / "shared" / "data" / "meshes" / "armadillo.obj"

@@ -27,12 +27,12 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import machine_info, write_json  # noqa: E402
+from _common import machine_info, write_json
 
-import ndpack as nd  # noqa: E402
-from ndpack.backends import get_backend  # noqa: E402
-from ndpack.backends.base import compiled_program  # noqa: E402
-from ndpack.builtin import BUILTIN  # noqa: E402
+import ndpack as nd
+from ndpack.backends import get_backend
+from ndpack.kernels.compiled import compiled_program
+from ndpack.named_shapes import BUILTIN
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -28,7 +28,7 @@ sys.path.insert(0, str(HERE.parent))  # the checkout's ndpack, even when another
 import numpy as np  # noqa: E402
 
 import ndpack as nd  # noqa: E402
-from ndpack.render import camera_axes  # noqa: E402
+from ndpack.pictures import camera_axes  # noqa: E402
 
 OUT = HERE / "img" / "collision-link-8-32-128.png"
 COUNTS = (8, 32, 128)

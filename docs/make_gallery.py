@@ -24,9 +24,8 @@ sys.path.insert(0, str(ROOT))  # the checkout's ndpack, even when another is ins
 import numpy as np  # noqa: E402
 
 import ndpack as nd  # noqa: E402
-import ndpack.plot  # noqa: E402
-import ndpack.render  # noqa: E402
-from ndpack.builtin import from_spec  # noqa: E402
+import ndpack.pictures  # noqa: E402
+from ndpack.named_shapes import from_spec  # noqa: E402
 
 IMAGES = HERE / "img" / "gallery"  # main() points it under --out
 #: The most spheres any packing gets (--max-spheres); None: as written below.
@@ -46,11 +45,11 @@ MAX_BYTES = 290_000
 
 
 def rendered(packing, file, **options):
-    """``ndpack.render.render`` into ``IMAGES / file``, kept under :data:`MAX_BYTES`."""
+    """``ndpack.pictures.render`` into ``IMAGES / file``, kept under :data:`MAX_BYTES`."""
     from PIL import Image
 
     path = IMAGES / file
-    picture = Image.fromarray(ndpack.render.render(packing, size=(SIZE, SIZE), **options))
+    picture = Image.fromarray(ndpack.pictures.render(packing, size=(SIZE, SIZE), **options))
     picture.save(path, optimize=True)
     if path.stat().st_size > MAX_BYTES:
         picture.quantize(256, dither=Image.Dither.FLOYDSTEINBERG).save(path, optimize=True)
@@ -86,23 +85,23 @@ def main(argv=None) -> int:
 
     # 2-D: the unit square.
     square = packed(nd.Box([0, 0], [1, 1]), 5000, backend, "square")
-    ndpack.plot.save_figure(square, IMAGES / "square.png", dpi=DPI)
+    ndpack.pictures.save_figure(square, IMAGES / "square.png", dpi=DPI)
     entry("square.png", "The unit square, 5,000 circles",
           f"Fill {square.fill:.4f}. Colour is the radius, on a log scale.",
           """
 square = nd.pack(nd.Box([0, 0], [1, 1]), n=5000, mode="fast")
-ndpack.plot.save_figure(square, "square.png")
+ndpack.pictures.save_figure(square, "square.png")
 """)
 
     # 2-D: a ring (a 256-gon with a hole), the built-in `annulus`.
     ring = packed(from_spec("annulus"), 3000, backend, "annulus")
-    ndpack.plot.save_figure(ring, IMAGES / "annulus.png", dpi=DPI)
+    ndpack.pictures.save_figure(ring, IMAGES / "annulus.png", dpi=DPI)
     entry("annulus.png", "A ring, 3,000 circles",
           f"Fill {ring.fill:.4f}. The built-in `annulus`: a 256-gon with a 256-gon hole "
           "(`nd.Polygon`). The black line is the outline, drawn from the distance.",
           """
-ring = nd.pack(ndpack.builtin.from_spec("annulus"), n=3000, mode="fast")   # ndpack pack annulus
-ndpack.plot.save_figure(ring, "annulus.png")
+ring = nd.pack(ndpack.named_shapes.from_spec("annulus"), n=3000, mode="fast")   # ndpack pack annulus
+ndpack.pictures.save_figure(ring, "annulus.png")
 """)
 
     # 3-D: the demo part, whole and cut.
@@ -111,38 +110,39 @@ ndpack.plot.save_figure(ring, "annulus.png")
     rendered(demo, "demo_cut.png", view=(-50, 65), clip=([0, 0, 0], [0, 0, 1]))
     entry("demo.png", "The demo part, 5,000 spheres",
           f"Fill {demo.fill:.4f}. A rounded block minus a bore and a spherical pocket, built by CSG "
-          "(`ndpack pack` packs it when given no shape). Shaded by `ndpack.render.render`.",
+          "(`ndpack pack` packs it when given no shape). Shaded by `ndpack.pictures.render`.",
           """
 block = nd.RoundedBox([-1, -0.6, -0.4], [1, 0.6, 0.4], 0.15)
 part = block - nd.Cylinder([0.45, 0, -1], [0.45, 0, 1], 0.25) - nd.Ball([-0.5, 0, 0.45], 0.35)
 demo = nd.pack(part, n=5000, mode="fast")
-ndpack.render.render(demo, "demo.png", size=(600, 600), view=(-50, 65))
+ndpack.pictures.render(demo, "demo.png", size=(600, 600), view=(-50, 65))
 """)
     entry("demo_cut.png", "The demo part, cut at z = 0",
           "The same packing without the spheres whose centre lies above z = 0 (`clip=(point, normal)` "
           "drops the side the normal points to): the large spheres inside, and the bore.",
           """
-ndpack.render.render(demo, "demo_cut.png", size=(600, 600), view=(-50, 65), clip=([0, 0, 0], [0, 0, 1]))
+ndpack.pictures.render(demo, "demo_cut.png", size=(600, 600), view=(-50, 65), clip=([0, 0, 0], [0, 0, 1]))
 """)
 
     # A triangle mesh: the cow.
     cow_file = COW if COW.exists() else COW_SMALL
     cow_mesh = nd.TriangleMesh.load(cow_file)
     cow = packed(cow_mesh, 3000, backend, "cow")
-    rendered(cow, "cow.png", axes=(2, 0, 1), view=(-35, 20))
+    rendered(cow, "cow.png", up="y", view=(-35, 20))
     entry("cow.png", "A triangle mesh: the cow, 3,000 spheres",
           f"Fill {cow.fill:.4f}. `cow.obj` (5,804 triangles) has faces that cross in its head, so its "
           f"inside is told by the winding number (`mesh.sign_method` is `{cow_mesh.sign_method}`; see "
-          "[meshes.md](meshes.md)). `axes=(2, 0, 1)` stands it up: its up is its second axis.",
+          "[meshes.md](meshes.md)). Its up is y, as OBJ files have it by convention: `up='auto'` (the "
+          "default) reads that from the file's name, `up='y'` says it.",
           """
 cow = nd.pack(nd.TriangleMesh.load("cow.obj"), n=3000, mode="fast")
-ndpack.render.render(cow, "cow.png", size=(600, 600), axes=(2, 0, 1), view=(-35, 20))
+ndpack.pictures.render(cow, "cow.png", size=(600, 600), up="y", view=(-35, 20))
 """)
 
     # 4-D: a ball with a hole, sliced.
     shell = nd.Ball(np.zeros(4), 1.0) - nd.Ball(np.zeros(4), 0.5)
     ball4 = packed(shell, 3000, backend, "4-D ball with a hole")
-    ndpack.plot.save_figure(ball4, IMAGES / "ball4d_slice.png", at=[0, 0, 0, 0], dpi=DPI)
+    ndpack.pictures.save_figure(ball4, IMAGES / "ball4d_slice.png", at=[0, 0, 0, 0], dpi=DPI)
     rendered(ball4, "ball4d_3d.png", at=[0, 0, 0, 0.3])
     entry("ball4d_slice.png", "4-D: a ball with a hole, 3,000 spheres, sliced by a plane",
           f"Fill {ball4.fill:.4f}. The unit 4-ball minus the ball of radius 0.5. The plane x2 = x3 = 0 "
@@ -151,24 +151,24 @@ ndpack.render.render(cow, "cow.png", size=(600, 600), axes=(2, 0, 1), view=(-35,
           """
 shell = nd.Ball(np.zeros(4), 1.0) - nd.Ball(np.zeros(4), 0.5)
 ball4 = nd.pack(shell, n=3000, mode="fast")
-ndpack.plot.save_figure(ball4, "ball4d_slice.png", at=[0, 0, 0, 0])   # axes=(0, 1) by default
+ndpack.pictures.save_figure(ball4, "ball4d_slice.png", at=[0, 0, 0, 0])   # axes=(0, 1) by default
 """)
     entry("ball4d_3d.png", "4-D: the same packing, 3-D slice x3 = 0.3",
           "A 3-D slice is drawn shaded, each 4-D sphere as the 3-D ball it cuts from the slice.",
           """
-ndpack.render.render(ball4, "ball4d_3d.png", size=(600, 600), at=[0, 0, 0, 0.3])   # axes=(0, 1, 2)
+ndpack.pictures.render(ball4, "ball4d_3d.png", size=(600, 600), at=[0, 0, 0, 0.3])   # axes=(0, 1, 2)
 """)
 
     # Fill against count, from the packings' per-round statistics.
     packings = [square, ring, demo, cow, ball4]
     labels = ["square (2-D)", "ring (2-D)", "demo part (3-D)", "cow (3-D mesh)", "ball with a hole (4-D)"]
-    ndpack.plot.save_fill_figure(packings, IMAGES / "fill.png", labels=labels, dpi=DPI, figsize=(10, 4.2))
+    ndpack.pictures.save_fill_figure(packings, IMAGES / "fill.png", labels=labels, dpi=DPI, figsize=(10, 4.2))
     entry("fill.png", "Fill against count",
           "Fill and uncovered fraction after each round of the packings above "
           "(`Packing.stats`). The uncovered fraction falls about as a power of the count; its exponent "
           "shrinks with the dimension.",
           """
-ndpack.plot.save_fill_figure([square, ring, demo, cow, ball4], "fill.png", labels=[...])
+ndpack.pictures.save_fill_figure([square, ring, demo, cow, ball4], "fill.png", labels=[...])
 """)
 
     write_markdown(args.out / "gallery.md", backend)
@@ -186,7 +186,7 @@ def write_markdown(path, backend):
         "Made by `python docs/make_gallery.py` (do not edit by hand): every packing in the fast mode,",
         f"seed 0, `{backend}` backend, verified in float64 before it was drawn. The code under each",
         "picture is the gist; the script has all of it. It assumes `import numpy as np`,",
-        "`import ndpack as nd`, `import ndpack.plot`, `import ndpack.render` and `import ndpack.builtin`.",
+        "`import ndpack as nd`, `import ndpack.pictures` and `import ndpack.named_shapes`.",
         "",
     ]
     for item in ENTRIES:

@@ -3,12 +3,12 @@
 Packs the unit square in the fast mode (many circles a round, the prototype grid refined where
 the gaps have become small), then writes:
 
-- ``square.png`` and ``square.svg``: the circles, coloured by radius (``ndpack.plot.save_figure``;
+- ``square.png`` and ``square.svg``: the circles, coloured by radius (``ndpack.pictures.save_figure``;
   above 5,000 circles the SVG holds them as one embedded image, the axes stay vector);
 - ``square_gap.png``: a close-up of the gap between the largest circle, a corner circle and the
   bottom edge, where the small circles are;
 - ``square_fill.png``: fill and uncovered fraction against the circle count
-  (``ndpack.plot.save_fill_figure``);
+  (``ndpack.pictures.save_fill_figure``);
 - ``square.npz``: the packing, to reload with ``nd.Packing.load``.
 
     python examples/apollonian_square.py                        # 20,000 circles into ./out
@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 import ndpack as nd
-import ndpack.plot
+import ndpack.pictures
 
 
 def main():
@@ -39,10 +39,10 @@ def main():
     report = packing.verify()
 
     files = [
-        ndpack.plot.save_figure(packing, out / "square.png", dpi=150),
-        ndpack.plot.save_figure(packing, out / "square.svg"),
+        ndpack.pictures.save_figure(packing, out / "square.png", dpi=150),
+        ndpack.pictures.save_figure(packing, out / "square.svg"),
         close_up(packing, out / "square_gap.png"),
-        ndpack.plot.save_fill_figure(packing, out / "square_fill.png"),
+        ndpack.pictures.save_fill_figure(packing, out / "square_fill.png"),
         packing.save(out / "square.npz"),
     ]
     print(f"{len(packing):,} circles, fill {packing.fill:.5f}, largest radius {packing.radii.max():.4f}, "
@@ -54,14 +54,14 @@ def main():
 
 
 def close_up(packing, path, x=(0.15, 0.27), y=(-0.002, 0.07)):
-    """A close-up: ``ndpack.plot.plot`` on our own axes, then zoomed in."""
+    """A close-up: ``ndpack.pictures.plot`` on our own axes, then zoomed in."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     figure, ax = plt.subplots(figsize=(7, 4))
-    ndpack.plot.plot(packing, ax=ax)
+    ndpack.pictures.plot(packing, ax=ax)
     ax.set_xlim(*x)
     ax.set_ylim(*y)
     ax.set_title(f"close-up: x in [{x[0]}, {x[1]}], y in [0, {y[1]}]")

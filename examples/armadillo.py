@@ -1,7 +1,7 @@
 """A triangle mesh packed with spheres, rendered, and saved for other tools.
 
 Loads a mesh file (any format trimesh reads: OBJ, STL, PLY, OFF, GLB), packs it in the fast
-mode, renders the spheres shaded (``ndpack.render.render``) and writes the spheres in every
+mode, renders the spheres shaded (``ndpack.pictures.render``) and writes the spheres in every
 3-D format ndpack has:
 
 - ``armadillo.png``: the shaded render, and ``armadillo_cut.png``: the same, cut in half;
@@ -26,8 +26,8 @@ from pathlib import Path
 import numpy as np
 
 import ndpack as nd
-import ndpack.formats
-import ndpack.render
+import ndpack.io
+import ndpack.pictures
 
 SHARED = Path("/work/shared/data/meshes/armadillo.obj")
 SMALL = Path(__file__).resolve().parent.parent / "tests" / "data" / "meshes" / "armadillo-20k.ply"
@@ -65,12 +65,12 @@ def main():
     # The armadillo's up is its second axis (y): axes=(2, 0, 1) puts y up on screen.
     view = dict(axes=(2, 0, 1), view=(args.azimuth, 15), size=(args.size, args.size))
     picture, cut = out / f"{args.name}.png", out / f"{args.name}_cut.png"
-    ndpack.render.render(packing, picture, **view)
+    ndpack.pictures.render(packing, picture, **view)
     # Leave out the spheres whose centre lies beyond the plane through the middle, facing the camera.
-    _, _, towards = ndpack.render.camera_axes(*view["view"])
+    _, _, towards = ndpack.pictures.camera_axes(*view["view"])
     facing = np.zeros(3)
     facing[list(view["axes"])] = towards  # the camera direction in the mesh's own coordinates
-    ndpack.render.render(packing, cut, clip=(packing.centers.mean(axis=0), facing), **view)
+    ndpack.pictures.render(packing, cut, clip=(packing.centers.mean(axis=0), facing), **view)
     files = [
         picture,
         cut,
@@ -83,7 +83,7 @@ def main():
     for path in files:
         print(f"wrote {path} ({path.stat().st_size / 1e6:.2f} MB)")
     print("every format ndpack writes:")
-    print(ndpack.formats.table())
+    print(ndpack.io.table())
 
 
 if __name__ == "__main__":

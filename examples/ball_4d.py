@@ -5,9 +5,9 @@ CSG. A packing in 4-D cannot be drawn whole; its slices can. A 4-ball of radius 
 centre lies at distance ``h`` from a slice meets it in a ball of radius ``sqrt(r**2 - h**2)``, so:
 
 - ``ball4d_slices.png``: 2-D slices (planes x0-x1) at x2 = x3 = 0, at x3 = 0.5, at x3 = 0.8:
-  the hole shrinks and vanishes as the plane leaves the centre (``ndpack.plot.plot``, ``at=``);
-- ``ball4d_slice.svg``: the first of those, as a vector file (``ndpack.plot.save_figure``);
-- ``ball4d_3d.png``: the 3-D slices x3 = 0 and x3 = 0.6, shaded (``ndpack.render.render`` with
+  the hole shrinks and vanishes as the plane leaves the centre (``ndpack.pictures.plot``, ``at=``);
+- ``ball4d_slice.svg``: the first of those, as a vector file (``ndpack.pictures.save_figure``);
+- ``ball4d_3d.png``: the 3-D slices x3 = 0 and x3 = 0.6, shaded (``ndpack.pictures.render`` with
   ``at=``); each picture is framed to its own slice, which is smaller at x3 = 0.6;
 - ``ball4d.npz``: the packing.
 
@@ -22,8 +22,7 @@ from pathlib import Path
 import numpy as np
 
 import ndpack as nd
-import ndpack.plot
-import ndpack.render
+import ndpack.pictures
 
 
 def main():
@@ -48,7 +47,7 @@ def main():
           f"{packing.radii.max():.4f}, {elapsed:.1f} s ({packing.params['backend']} backend), valid: {report.ok}")
 
     files = [slices(packing, out / "ball4d_slices.png", heights=(0.0, 0.5, 0.8))]
-    files.append(ndpack.plot.save_figure(packing, out / "ball4d_slice.svg", at=[0, 0, 0, 0]))
+    files.append(ndpack.pictures.save_figure(packing, out / "ball4d_slice.svg", at=[0, 0, 0, 0]))
     files.append(renders(packing, out / "ball4d_3d.png", heights=(0.0, 0.6)))
     files.append(packing.save(out / "ball4d.npz"))
     for path in files:
@@ -64,7 +63,7 @@ def slices(packing, path, heights):
 
     figure, axes = plt.subplots(1, len(heights), figsize=(5.2 * len(heights), 4.6))
     for ax, height in zip(np.atleast_1d(axes), heights):
-        ndpack.plot.plot(packing, ax=ax, at=[0, 0, 0, height])
+        ndpack.pictures.plot(packing, ax=ax, at=[0, 0, 0, height])
         ax.set_title(f"slice x2 = 0, x3 = {height}")
     figure.tight_layout()
     figure.savefig(path, dpi=120)
@@ -82,7 +81,7 @@ def renders(packing, path, heights):
     figure, axes = plt.subplots(1, len(heights), figsize=(4.5 * len(heights), 4.8))
     for ax, height in zip(np.atleast_1d(axes), heights):
         # render() returns the picture as an array when no path is given.
-        image = ndpack.render.render(packing, at=[0, 0, 0, height], view=(35, 25), size=(540, 540))
+        image = ndpack.pictures.render(packing, at=[0, 0, 0, height], view=(35, 25), size=(540, 540))
         ax.imshow(image)
         ax.set_axis_off()
         ax.set_title(f"3-D slice x3 = {height} (outer radius {np.sqrt(1 - height**2):.2f})")

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 import ndpack as nd
-import ndpack.render
+import ndpack.pictures
 
 LENGTH, WIDTH, ROUND = 1.0, 0.3, 0.08  # half-length and half-width of a bar, radius of its edges
 BOUNDS = [[-1.05] * 3, [1.05] * 3]
@@ -114,7 +114,7 @@ def draw(packings, path):
 
     figure, axes = plt.subplots(1, len(packings), figsize=(5 * len(packings), 5.3))
     for ax, (name, packing) in zip(axes, packings.items()):
-        ax.imshow(ndpack.render.render(packing, view=(30, 25), size=(600, 600)))
+        ax.imshow(ndpack.pictures.render(packing, view=(30, 25), size=(600, 600)))
         ax.set_axis_off()
         ax.set_title(f"{name} plug-in: {len(packing):,} spheres, fill {packing.fill:.3f}")
     figure.tight_layout()

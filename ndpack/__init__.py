@@ -31,7 +31,7 @@ from .packing import Packing, RoundStats
 from .protosphere import Round, pack, pack_sizes
 from .rotation import rotation
 from .sizes import SizeDistribution, SizeReport
-from .shapes import *  # noqa: F401,F403  (the shape classes, listed in shapes.__all__)
+from .shapes import *  # noqa: F403  (the shape classes, listed in shapes.__all__)
 from .shapes import __all__ as _shape_names
 from .verify import Verification, verify
 

@@ -3,6 +3,8 @@
 A covering is judged by these queries on tens of thousands of samples against up to thousands of
 balls. Every pair is visited (a Numba loop, parallel over points), which is exact; a k-d tree of the
 centres would need a search as wide as the largest ball, as the radii differ by orders of magnitude.
+
+:func:`enclosing_sphere` bounds the whole union by one sphere (a sphere tree's node, a ``.sph`` root).
 """
 
 from __future__ import annotations
@@ -78,6 +80,40 @@ def best_balls(points, centers, radii, clearances) -> tuple[np.ndarray, np.ndarr
     covering, cheapest = np.empty(n, np.int64), np.empty(n, np.int64)
     _kernels()[1](points, centers, radii, clearances, gap, covering, cheapest, cost)
     return gap, covering, cheapest, cost
+
+
+def enclosing_sphere(centers, radii, steps: int = 100) -> tuple[np.ndarray, float]:
+    """A sphere that encloses every given sphere, close to the smallest one.
+
+    Badoiu and Clarkson's iteration: from the bounding box's middle, step ``1 / (k + 1)`` of
+    the way towards the farthest sphere surface; the result, or the box's middle where that is
+    better. The radius is measured from the centre chosen, so the sphere always encloses every
+    one given; it is within 0.2% of the smallest in the tests' cases.
+
+    Parameters
+    ----------
+    centers : (n, d) float64
+    radii : (n,) float64
+
+    Returns
+    -------
+    center : (d,) float64
+    radius : float
+    """
+    centers = np.asarray(centers, dtype=float)
+    radii = np.asarray(radii, dtype=float)
+    center = ((centers - radii[:, None]).min(axis=0) + (centers + radii[:, None]).max(axis=0)) / 2
+    box_center = center
+    for k in range(1, steps + 1):
+        offsets = centers - center
+        lengths = np.linalg.norm(offsets, axis=1)
+        far = int(np.argmax(lengths + radii))
+        if lengths[far] > 0:
+            surface = centers[far] + radii[far] * offsets[far] / lengths[far]
+            center = center + (surface - center) / (k + 1)
+    # The box's middle is sometimes better (a few extreme spheres): keep the smaller sphere.
+    return min(((c, float((np.linalg.norm(centers - c, axis=1) + radii).max())) for c in (center, box_center)),
+               key=lambda pair: pair[1])
 
 
 def _arrays(points, centers, radii):

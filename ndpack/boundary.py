@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import ShapeError
+from .inside_cells import InsideCells
 from .oracle import Oracle, unit_rows
 
 #: Projections of a band sample onto the boundary; exact oracles need one, lower bounds a few.
@@ -58,8 +59,6 @@ def exactly_sampled(shape: Oracle) -> bool:
 def sample_cells(shape: Oracle):
     """The shape's :class:`~ndpack.inside_cells.InsideCells` for :func:`samples`: with a margin of
     the projection band where the boundary is sampled by projection."""
-    from .inside_cells import InsideCells
-
     return InsideCells(shape, margin=0.0 if exactly_sampled(shape) else _band(shape))
 
 

@@ -22,12 +22,12 @@ from .errors import KEPT_IN_ERROR, InvalidPackingError, NdpackError, ParameterEr
 PACK_EXAMPLES = """examples:
   ndpack pack                                   # the 3-D demo part, 1000 spheres
   ndpack pack box:dim=4 -n 500 -o box4.npz      # a built-in shape, any dimension
-  ndpack pack cow.obj -n 5000 --mode fast -o cow.npz
+  ndpack pack cow.obj -n 5000 -o cow.npz
   ndpack pack part.py -n 2000 -o part.vtp       # a script that sets `shape` (ndpack or manifold3d)
   ndpack pack my_shapes:gyroid -n 1000          # a plug-in: module:function
   ndpack pack annulus -n 2000 --batch 8 -o ring.csv
-  ndpack pack box:dim=3 -n 100000 --mode fast --backend warp --device cuda:0 -o cube.npz
-  ndpack pack cow.obj -n 3000 --mode fast -o cow.json --format curobo --option link=cow
+  ndpack pack box:dim=3 -n 100000 --backend warp --device cuda:0 -o cube.npz
+  ndpack pack cow.obj -n 3000 -o cow.json --format curobo --option link=cow
 
 SHAPE is a built-in name[:key=value,...], a mesh file (.obj .stl .ply .off .glb ...), a Python
 script (.py) that sets `shape`, or module:function. Built-in shapes: {shapes}.
@@ -73,8 +73,9 @@ file records (an open mesh packed with its holes capped is checked capped) unles
 """
 
 RENDER_EXAMPLES = """examples:
-  ndpack render cow.npz -o cow.png              # 3-D: a shaded picture
-  ndpack render cow.npz -o cow.png --view -35,20 --axes 2,0,1
+  ndpack render cow.npz -o cow.png              # 3-D: a shaded picture, standing up
+  ndpack render cow.npz -o cow.png --view -35,20          # the camera at azimuth -35, 20 degrees up
+  ndpack render scan.npz -o scan.png --up y     # stand y up (auto: the mesh file's convention, ...)
   ndpack render cow.npz -o cut.png --clip 0,0,0,1,0,0     # drop the spheres beyond x = 0
   ndpack render ring.npz -o ring.svg            # 2-D: circles with the outline
   ndpack render box4.npz -o slice.png --kind slice --axes 0,1 --at 0.5,0.5,0.5,0.5
@@ -185,9 +186,9 @@ def _share(text: str) -> float:
 
 
 def _parser() -> argparse.ArgumentParser:
-    from .builtin import BUILTIN
+    from .named_shapes import BUILTIN
     from .covering import CHECK_SAMPLES, DEFAULT_SAMPLES
-    from .formats import table
+    from .io import table
 
     parser = argparse.ArgumentParser(
         prog="ndpack",
@@ -224,8 +225,9 @@ def _parser() -> argparse.ArgumentParser:
     pack.add_argument("--grid", type=int, help="grid cells along the longest side")
     pack.add_argument("--iterations", type=int, default=50, help="prototype steps (default 50)")
     pack.add_argument("--batch", type=int, default=1, help="spheres per round in the faithful mode (default 1)")
-    pack.add_argument("--mode", choices=("faithful", "fast"), default="faithful",
-                      help="faithful: the paper's rounds (default); fast: many spheres a round and a "
+    pack.add_argument("--mode", choices=("auto", "faithful", "fast"), default="auto",
+                      help="auto (default): fast for more than 100 spheres in 2-D and 3-D, else faithful; "
+                      "faithful: the paper's rounds, one sphere each; fast: many spheres a round and a "
                       "grid refined where gaps are small, for large counts")
     pack.add_argument("--seed", type=_seed, default=0, help="random seed, an integer >= 0 (default 0)")
     pack.add_argument("--backend", help="numpy, numba, numba-cuda or warp (default: $NDPACK_BACKEND or the fastest)")
@@ -279,15 +281,26 @@ def _parser() -> argparse.ArgumentParser:
                         help="run the script or module the file records as its shape (only for files you trust)")
 
     render = commands.add_parser("render", help="draw a saved packing to .png, .svg or .pdf", formatter_class=raw,
-                                 epilog=RENDER_EXAMPLES)
+                                 epilog=RENDER_EXAMPLES,
+                                 description="Draw a saved packing. Turn a 3-D picture with --up (which axis points "
+                                 "up),\n--view AZIMUTH,ELEVATION (where the camera looks from) and --axes (which "
+                                 "axes,\nin which order).")
     render.add_argument("packing", help="a packing file")
     render.add_argument("-o", "--output", help="the picture (default: the packing's name with .png)")
     render.add_argument("--kind", choices=("auto", "render", "slice", "fill"), default="auto",
                         help="auto: circles in 2-D, a shaded render in 3-D and up; slice: circles cut by a "
                         "plane; fill: fill against count")
     render.add_argument("--size", type=_size, help="WIDTHxHEIGHT of a shaded render (default 900x900)")
-    render.add_argument("--view", type=_numbers, help="azimuth,elevation in degrees (default 35,25)")
-    render.add_argument("--axes", type=_integers, help="the axes of the picture or slice, e.g. 0,1 or 0,1,2")
+    render.add_argument("--up", choices=("auto", "x", "y", "z", "-x", "-y", "-z"),
+                        help="the axis that points up on screen (-y: y pointing down). auto "
+                        "(default): the mesh file's convention (.obj, .gltf, .glb: y; .stl, .3mf: z), else the "
+                        "longest extent when clearly longest, else z; a slice shows it vertical")
+    render.add_argument("--view", type=_numbers, metavar="AZIMUTH,ELEVATION",
+                        help="AZIMUTH,ELEVATION in degrees (default 35,25): the camera turns about the up axis, "
+                        "and rises above the plane across it")
+    render.add_argument("--axes", type=_integers,
+                        help="the axes of the picture or slice, e.g. 0,1 or 0,1,2; given without --up, the last "
+                        "points up (2,0,1 stands y up)")
     render.add_argument("--at", type=_numbers, help="a point of the slice (default: the centres' mean)")
     render.add_argument("--clip", type=_numbers, help="px,py,pz,nx,ny,nz: drop spheres beyond this plane")
     render.add_argument("--shape", help="the shape whose outline a slice draws (default: the recorded one)")
@@ -300,6 +313,11 @@ def _parser() -> argparse.ArgumentParser:
     info.add_argument("packing", help="a packing file")
 
     commands.add_parser("backends", help="list the backends that work here, and why the others do not")
+
+    samples = commands.add_parser("samples", help="write the sample files the docs use (cow.obj, arm.urdf, ...)",
+                                  formatter_class=raw, epilog=SAMPLES_EXAMPLES)
+    samples.add_argument("folder", nargs="?", default=".", help="where to write them (default: here)")
+    samples.add_argument("--suffix", default=".obj", help="mesh format by suffix (default .obj; .stl, .ply, .glb, ...)")
     return parser
 
 
@@ -322,7 +340,7 @@ def _pack(args) -> int:
     from .packing import repair_summary
     from .protosphere import pack
     from .shapes.mesh import mesh_notes
-    from .sources import describe, load_shape
+    from .shape_sources import describe, load_shape
 
     called = time.perf_counter()
     source = args.shape
@@ -375,7 +393,8 @@ def _pack(args) -> int:
         print(f"saved:    {_save_or_keep(packing, args.output, args.format, options)}")
     else:
         print("saved:    nothing (give -o PATH to keep the spheres)")
-    print(f"time:     {elapsed:.2f} s packing ({packing.params['backend']} backend), "
+    print(f"time:     {elapsed:.2f} s packing ({packing.params['backend']} backend, "
+          f"{packing.params['mode']} mode), "
           f"{time.perf_counter() - called:.2f} s in all (loading, checking, saving)")
     if packing.stop_reason == "interrupted":
         print("ndpack: interrupted; " + ("kept what was packed" if args.output else "nothing saved (no --output)"),
@@ -399,7 +418,7 @@ def _pack_keeping_invalid(pack, output: str | None, shape, **options):
 
 def _check_output(path: str, format: str | None, dim: int, options: dict) -> None:
     """Refuse a bad output (format, suffix, options, dimension, folder) before packing, not after."""
-    from .formats import check
+    from .io import check
 
     check(path, format, dim, **options)
     _check_writable(path)
@@ -421,7 +440,7 @@ def _save_or_keep(packing, path: str, format: str | None, options: dict) -> Path
     """Save to ``path``; if that fails after all (a full disk, a bad option value), keep the
     packing as ``.npz`` beside it, else in the current folder, else in the temporary folder,
     and still report the error, so a long run is never lost."""
-    from .formats import save
+    from .io import save
 
     try:
         return save(packing, path, format, **options)
@@ -446,7 +465,7 @@ def _cover(args) -> int:
     if args.package:
         raise ParameterError("--package applies to a URDF's meshes, and the shape is not a .urdf file: leave it out")
     from .covering import cover
-    from .sources import describe, load_shape
+    from .shape_sources import describe, load_shape
 
     source = args.shape
     if args.dim is not None:
@@ -511,7 +530,7 @@ def _cover_robot(args) -> int:
 
 # ------------------------------------------------------------------------- saved packings
 def _load(path: str):
-    from .formats import load
+    from .io import load
 
     return load(path)
 
@@ -525,7 +544,7 @@ def _recorded_shape(packing, override: str | None, required: bool, trust: bool =
     Where the shape is not ``required`` such a source is skipped with a note on stderr.
     A recorded mesh file is loaded with the packing's recorded ``holes`` (what inside meant when
     it was packed) unless ``holes`` is given, and so with ``sign``."""
-    from .sources import code_in, is_mesh_file, load_shape
+    from .shape_sources import code_in, is_mesh_file, load_shape
 
     if override:
         return _with_recorded_period(load_shape(override, holes, sign), packing)
@@ -618,13 +637,13 @@ def _verify_covering(args, packing, shape) -> int:
 
 
 def _render(args) -> int:
-    from .render import picture
+    from .pictures import choose_up, picture
 
     packing = _load(args.packing)
     output = args.output or str(Path(args.packing).with_suffix(".png"))
     _check_writable(output)
     options = {}
-    for name in ("size", "view", "axes", "at"):
+    for name in ("size", "view", "up", "axes", "at"):
         if getattr(args, name) is not None:
             options[name] = getattr(args, name)
     if args.clip is not None:
@@ -645,6 +664,10 @@ def _render(args) -> int:
         if shape is not None:
             options["shape"] = shape
     print(f"wrote {picture(packing, output, kind=kind, **options)}")
+    if kind != "fill" and packing.dim >= 3:  # which way is up, and why: the picture's report
+        axes = (0, 1) if args.axes is None and draws_circles and packing.dim > 3 else args.axes
+        print(f"up:    {choose_up(packing, args.up or 'auto', axes)}; turn it with --up, --view AZIMUTH,ELEVATION "
+              "or --axes")
     return 0
 
 
@@ -730,7 +753,25 @@ def _backends(args) -> int:
     return 0 if any(s.startswith("ok") for s in status.values()) else 1
 
 
-COMMANDS = {"pack": _pack, "cover": _cover, "verify": _verify, "render": _render, "info": _info, "backends": _backends}
+SAMPLES_EXAMPLES = """examples:
+  ndpack samples                 # cow.obj, fandisk.obj, armadillo.obj and arm.urdf, here
+  ndpack samples meshes --suffix .stl
+"""
+
+
+def _samples(args) -> int:
+    from . import samples
+
+    if not args.suffix.startswith("."):
+        raise ParameterError(f"--suffix is a file suffix such as .obj or .stl, got {args.suffix!r}")
+    notes = [samples.SAMPLES[name] for name in samples.names()] + [samples.ROBOT_NOTE]
+    for path, note in zip(samples.write(args.folder, suffix=args.suffix), notes):
+        print(f"{str(path):16s} {note}")
+    return 0
+
+
+COMMANDS = {"pack": _pack, "cover": _cover, "verify": _verify, "render": _render, "info": _info, "backends": _backends,
+            "samples": _samples}
 
 
 #: Options whose value is a list of numbers, which may start with a minus sign.
@@ -739,10 +780,13 @@ NUMBER_LIST = re.compile(r"^-?[\d.]+(e-?\d+)?(,-?[\d.]+(e-?\d+)?)*$")
 
 
 def _join_negative_lists(argv: list[str]) -> list[str]:
-    """``--view -35,20`` -> ``--view=-35,20``: argparse would take ``-35,20`` for an option."""
+    """``--view -35,20`` -> ``--view=-35,20`` and ``--up -y`` -> ``--up=-y``: argparse would take
+    ``-35,20`` or ``-y`` for an option."""
     joined = []
     for token in argv:
-        if joined and joined[-1] in NUMBER_LIST_OPTIONS and token.startswith("-") and NUMBER_LIST.match(token):
+        negative_axis = joined and joined[-1] == "--up" and re.fullmatch(r"-[xyz]", token)
+        if negative_axis or (joined and joined[-1] in NUMBER_LIST_OPTIONS and token.startswith("-")
+                             and NUMBER_LIST.match(token)):
             joined[-1] = f"{joined[-1]}={token}"
         else:
             joined.append(token)

@@ -55,10 +55,14 @@ from scipy.spatial import cKDTree
 from tqdm.auto import tqdm
 
 from . import ball_union
+from .backends import get_backend
 from .boundary import exactly_sampled, project, sample_cells, samples as shape_samples
 from .errors import ParameterError
 from .inside_cells import InsideCells
-from .oracle import Oracle, check_packable
+from .oracle import Oracle, as_points, check_packable
+from .packing import Packing
+from .protosphere import pack
+from .shapes.adapters import as_oracle
 from .shapes.mesh import mesh_notes, recorded_holes
 
 #: Boundary samples the cover is made on (the inside gets a quarter as many more).
@@ -213,8 +217,6 @@ class Covering:
         ``params["covering"]`` holds this run's parameters. Its spheres overlap and reach out of
         the shape, so :meth:`Packing.verify` fails on it: check it with :func:`check_covering`
         (``ndpack verify`` does, for a saved covering)."""
-        from .packing import Packing
-
         volume = self.report.shape_volume
         params = {"covering": dict(self.params)}
         if self.params.get("holes") is not None:  # verify and render reload the mesh the same way
@@ -223,17 +225,17 @@ class Covering:
                        params=params, stop_reason="covered", shape=self.shape)
 
     def save(self, path, format: str | None = None, **options) -> Path:
-        """Write the spheres in any of :func:`ndpack.formats.table`'s formats (``.sph`` as a 2-level
+        """Write the spheres in any of :func:`ndpack.io.table`'s formats (``.sph`` as a 2-level
         tree, ``format="curobo"`` as one link's ``collision_spheres``); returns the path.
         For a hierarchy, save :meth:`tree`."""
-        from .formats import save
+        from .io import save
 
         return save(self.as_packing(), path, format, **options)
 
     def tree(self, branching: int = 8, depth: int = 3, seed: int = 0):
         """A sphere-tree over this covering's shape whose deepest level has at most
         ``branching ** (depth - 1)`` spheres; see :func:`ndpack.sphere_tree.covering_tree`."""
-        from .sphere_tree import covering_tree
+        from .sphere_tree import covering_tree  # lazily: sphere_tree builds on this module
 
         return covering_tree(self.shape, branching=branching, depth=depth, seed=seed)
 
@@ -286,8 +288,6 @@ def cover(
     Covering
         Its ``report`` says whether fresh samples are all covered, and the protrusion.
     """
-    from .shapes.adapters import as_oracle
-
     started = time.perf_counter()
     shape = as_oracle(shape)
     check_packable(shape)
@@ -358,15 +358,13 @@ class Problem:
         self.candidates, self.clearances = candidates, clearances
         self.spacing = _spacing(points[np.any(normals != 0, axis=1)])
         self.samples, self.rng = samples, rng
-        self.diagonal = float(np.linalg.norm(np.ptp(shape.bounds, axis=0)))
+        self.diagonal = shape.diagonal
         self._tree = cKDTree(candidates)
 
     @classmethod
     def make(cls, shape, samples, packing=None, seed=0, backend=None, device=None, compiled=False) -> Problem:
         """Samples and candidates of ``shape``; with ``compiled``, its distances and gradients run
         on the backend's compiled kernels where it has float64 ones (:class:`CompiledQueries`)."""
-        from .protosphere import pack
-
         rng = np.random.default_rng(seed)
         if packing is None:
             packing = pack(shape, n=1, mode="fast", seed=seed, backend=backend, device=device, progress=False)
@@ -454,8 +452,6 @@ class CompiledQueries:
     def where_it_pays(cls, shape, backend=None, device=None):
         """``shape`` on ``backend``'s kernels, or ``shape`` itself: for meshes and outlines (their own
         queries are compiled already), the NumPy backend, and float32 precision."""
-        from .backends import get_backend
-
         if exactly_sampled(shape):
             return shape
         engine = get_backend(backend, device, shape=shape)
@@ -806,9 +802,6 @@ def check_covering(shape: Oracle, centers, radii, *, samples: int = CHECK_SAMPLE
     -------
     CoverReport
     """
-    from .oracle import as_points
-    from .shapes.adapters import as_oracle
-
     shape = as_oracle(shape)
     centers = as_points(centers, shape.dim).reshape(-1, shape.dim)
     radii = np.asarray(radii, dtype=np.float64).reshape(-1)
@@ -836,7 +829,7 @@ def _check(shape, centers, radii, samples, volume_samples, seed, cells=None):
         worst_gap=float(max(boundary_gaps.max(), inside_gaps.max())), gap_tolerance=tolerance,
         max_protrusion=float(protrusion.max(initial=0.0)),
         mean_protrusion=float(protrusion.mean()) if len(radii) else 0.0,
-        diagonal=float(np.linalg.norm(np.ptp(shape.bounds, axis=0))),
+        diagonal=shape.diagonal,
         outside_volume=outside, outside_volume_error=error, shape_volume=volume)
     missed = all_gaps > tolerance
     return report, points[missed], normals[missed]

@@ -70,10 +70,10 @@ class InsideCells:
         for level in range(finest + 1):
             size = (upper - lower) / 2**level
             unknown = np.argwhere(state == BOUNDARY)
-            centres = lower + (unknown + 0.5) * size
+            centers = lower + (unknown + 0.5) * size
             half = 0.5 * float(np.linalg.norm(size)) * (1 + 1e-9) + 1e-12 * shape.scale + self.margin
-            distance = shape._distance(centres)
-            self.evaluated += len(centres)
+            distance = shape._distance(centers)
+            self.evaluated += len(centers)
             state[tuple(unknown.T)] = np.where(distance < -half, INSIDE,
                                                np.where(distance > half, OUTSIDE, BOUNDARY)).astype(np.int8)
             left = int(np.count_nonzero(state == BOUNDARY))

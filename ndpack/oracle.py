@@ -130,6 +130,8 @@ class Oracle:
     exact_inside: bool = False
     exact_outside: bool = False
     convex: bool = False
+    #: Whether the shape has no scalar kernel, so runs on the NumPy backend alone (a NumPy plug-in).
+    numpy_only: bool = False
     _bounds: np.ndarray
 
     # ------------------------------------------------------------------ the protocol
@@ -140,6 +142,12 @@ class Oracle:
         Entries may be infinite for unbounded shapes (half-spaces, complements).
         """
         return self._bounds
+
+    @property
+    def diagonal(self) -> float:
+        """The length of the diagonal of :attr:`bounds` (infinite for an unbounded shape): the
+        unit of relative figures such as a covering's protrusion."""
+        return float(np.linalg.norm(np.ptp(self._bounds, axis=0)))
 
     @property
     def is_bounded(self) -> bool:
@@ -195,6 +203,14 @@ class Oracle:
         """Closed-form volume, or None when only a Monte Carlo estimate is possible."""
         return None
 
+    def _kernel_advice(self) -> str:
+        """What to do where no compiled backend can run this shape: the end of the message of
+        :func:`ndpack.kernels.compiled.compiled_program`."""
+        if any(node.numpy_only for node in tree(self)):
+            return ("Use backend='numpy', or write the plug-in as a scalar function (ndpack.ScalarFunction) "
+                    "so it compiles for every backend")
+        return "Use backend='numpy'"
+
     # ------------------------------------------------------------------ shared machinery
     @property
     def scale(self) -> float:
@@ -246,6 +262,7 @@ class Oracle:
     # Operands may be other libraries' shapes (manifold3d, trimesh, shapely): see as_oracle. An
     # empty part (ndpack.shapes.empty) is left out as the tree is built: a - empty is a, a & empty
     # is empty, so no node holds one.
+    # The node classes subclass Oracle (their modules import this one), so the operators import them when called.
     def union(self, *others: Oracle) -> Oracle:
         from .shapes.csg import Union
         from .shapes.empty import Empty, Everything
@@ -358,6 +375,16 @@ class Oracle:
 
     def __invert__(self) -> Oracle:
         return self.complement()
+
+
+def tree(shape):
+    """``shape`` and every shape below it (CSG nodes keep theirs in ``children``, ``child`` or ``a``/``b``)."""
+    yield shape
+    below = list(getattr(shape, "children", ()))
+    below += [getattr(shape, name) for name in ("child", "a", "b") if hasattr(shape, name)]
+    for part in below:
+        if isinstance(part, Oracle):  # Capsule's a and b are points, not shapes
+            yield from tree(part)
 
 
 def monte_carlo_volume(oracle: Oracle, samples: int, seed: int) -> Volume:

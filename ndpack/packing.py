@@ -1,4 +1,4 @@
-"""The result of a packing run; its files are written and read by :mod:`ndpack.formats`.
+"""The result of a packing run; its files are written and read by :mod:`ndpack.io`.
 
 Spheres are stored in insertion order: row ``i`` is the ``i``-th sphere the driver placed.
 """
@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from .oracle import ball_volume
+from .verify import verify
 
 #: Bumped when the file layout changes; load() refuses files from the future.
 FORMAT_VERSION = 1
@@ -115,15 +116,13 @@ class Packing:
 
     def verify(self, shape=None, tol: float | None = None, independent: bool = False):
         """Check validity in float64; see :func:`ndpack.verify`."""
-        from .verify import verify
-
         return verify(self, shape, tol, independent=independent)
 
-    def plot(self, shape=None, ax=None, axes=(0, 1), at=None):
-        """Draw the packing (2-D) or a slice of it; see :func:`ndpack.plot.plot`."""
-        from .plot import plot
+    def plot(self, shape=None, ax=None, axes=None, at=None, up="auto"):
+        """Draw the packing (2-D) or a slice of it; see :func:`ndpack.pictures.plot`."""
+        from .pictures import plot
 
-        return plot(self, shape, ax=ax, axes=axes, at=at)
+        return plot(self, shape, ax=ax, axes=axes, at=at, up=up)
 
     def replace_spheres(self, centers, radii, rounds) -> Packing:
         """A copy with other spheres and everything else kept."""
@@ -149,16 +148,16 @@ class Packing:
 
         ``.npz`` keeps everything, ``.csv`` the spheres and metadata, ``.json`` everything; the
         others (``.ply``, ``.vtp``, ``.obj``/``.stl``/``.glb``, ``.sph``, ``format="curobo"``,
-        ``format="medial"``) and their ``options`` are listed by :func:`ndpack.formats.table`.
+        ``format="medial"``) and their ``options`` are listed by :func:`ndpack.io.table`.
         """
-        from .formats import save
+        from .io import save
 
         return save(self, path, format, **options)
 
     @classmethod
     def load(cls, path, format: str | None = None) -> Packing:
         """Read a packing written by :meth:`save` (any format but ``medial``)."""
-        from .formats import load
+        from .io import load
 
         return load(path, format)
 

@@ -40,6 +40,7 @@ from .rounds import FAST_WINDOW, POLISH_AHEAD, POLISH_WINDOW, SIZE_BAND, SPLIT_R
 from .shapes.adapters import as_oracle
 from .shapes.mesh import recorded_holes
 from .shapes.plugin import check_plugin_slopes
+from .sizes import SizeDistribution
 from .verify import verify
 
 #: Grid cells over the bounds when ``grid`` is not given (32^3 in 3D, 181^2 in 2D).
@@ -68,6 +69,12 @@ POLISH_ITERATIONS, POLISH_EPS_START, POLISH_EPS_END, POLISH_POWER = 100, 0.05, 1
 #: clearance (99% within 2e-5, at most 1.4e-4; armadillo, 30,000 spheres), far below what the fast
 #: window gives away, for about 20% fewer move steps and 40% fewer polish steps (docs/benchmarks.md).
 FAST_EPS_END, FAST_POLISH_EPS_END = 1e-4, 2e-5
+#: ``mode="auto"`` takes the fast mode above this many spheres in these dimensions: there it
+#: filled within 0.14% of the faithful mode at equal counts, 1.3-6.6x sooner (200-5,000
+#: spheres); the faithful mode keeps small counts (the exact greedy order, for under 0.4 s
+#: more) and 4-D and up, where the fast mode's fill was 0.6-4.5% lower at 200-5,000 spheres
+#: (bench/auto_mode.py, docs/benchmarks.md "Which mode `auto` takes").
+AUTO_FAST_ABOVE, AUTO_FAST_DIMS = 100, (2, 3)
 #: A prototype swallowed by a new sphere may restart this factor of its radius from its centre.
 PUSH_OUT = 1.001
 #: Random starts per cell when dead prototypes are revived, before the driver gives up for room.
@@ -262,14 +269,14 @@ class RunState:
             )
         index = np.stack(np.unravel_index(np.arange(total), tuple(counts)), axis=1)
         cell_lower = lower + index * cell_size
-        centres, reach, wall = cell_bounds(cell_lower, cell_lower + cell_size, self._distance, self.wall_slack)
+        centers, reach, wall = cell_bounds(cell_lower, cell_lower + cell_size, self._distance, self.wall_slack)
         # A cell whose centre is farther out than half its diagonal (no positive clearance
         # bound) holds no interior point.
         keep = reach > 0
         cells = {"lower": cell_lower[keep], "upper": cell_lower[keep] + cell_size, "reach": reach[keep],
                  "wall": wall[keep]}
-        starts = self._restarts(centres[keep]).points(np.arange(len(cells["lower"])), cells["lower"], cells["upper"],
-                                                      centres[keep])
+        starts = self._restarts(centers[keep]).points(np.arange(len(cells["lower"])), cells["lower"], cells["upper"],
+                                                      centers[keep])
         no_spheres = np.zeros((len(cells["lower"]), 0), dtype=np.int64)
         points, clearance = best_starts(self.backend, self.shape, starts, *self.spheres, no_spheres)
         alive = clearance > 0
@@ -559,7 +566,7 @@ def pack(
     grid=None,
     iterations: int = 50,
     batch: int = 1,
-    mode: str = "faithful",
+    mode: str = "auto",
     restarts: int = 8,
     seed: int | None = 0,
     backend=None,
@@ -600,12 +607,15 @@ def pack(
     batch : int
         Faithful mode: up to this many mutually disjoint spheres per round; 1 is the paper's
         exact greedy order.
-    mode : "faithful" or "fast"
+    mode : "auto", "faithful" or "fast"
         ``"faithful"``: the paper's rounds on a fixed grid (with ``batch``). ``"fast"``: every
         candidate within ``FAST_WINDOW`` (20%) of the largest clearance becomes a sphere in one
         round where it is disjoint from the larger ones, and cells split where their gaps have
         become small against them; for large counts (see docs/benchmarks.md for its fill
-        against the faithful mode's).
+        against the faithful mode's). ``"auto"`` (the default): fast for more than
+        ``AUTO_FAST_ABOVE`` (100) spheres in 2-D and 3-D, else faithful (and faithful whenever
+        ``batch`` is given); ``params["mode"]`` records the mode run and ``params["mode_why"]``
+        why auto chose it.
     restarts : int
         Random points tried per cell when a prototype restarts; the best one starts.
     seed : int or None
@@ -656,8 +666,7 @@ def pack(
     check_compatible(shape)
     _check_parameters(n, min_radius, fill, time_budget, iterations, batch, restarts, seed, max_radius)
     max_radius = np.inf if max_radius is None else float(max_radius)
-    if mode not in ("faithful", "fast"):
-        raise ParameterError(f"mode must be 'faithful' or 'fast', got {mode!r}")
+    mode, mode_why = choose_mode(mode, n, shape.dim, batch)
     if mode == "fast" and batch != 1:
         raise ParameterError(
             f"batch={batch!r} applies to the faithful mode only: the fast mode takes every candidate "
@@ -673,6 +682,8 @@ def pack(
         fill=fill, time_budget=time_budget, batch=int(batch), mode=mode, polish_window=POLISH_WINDOW,
         **_run_params(shape, backend, counts, iterations, restarts, seed, centers_only),
     )
+    if mode_why:
+        params["mode_why"] = mode_why
     if mode == "fast":
         params.update(fast_eps_end=FAST_EPS_END, fast_polish_eps_end=FAST_POLISH_EPS_END, polish_ahead=polish_ahead)
 
@@ -683,6 +694,26 @@ def pack(
                seed=seed, n=n, radius_range=(float(min_radius), max_radius), fill=fill, time_budget=time_budget,
                progress=progress, on_invalid=on_invalid, on_round=on_round, params=params,
                centers_in=shape if centers_only else None)[0]
+
+
+def choose_mode(mode: str, n, dim: int, batch) -> tuple[str, str | None]:
+    """The mode a run takes, and why when ``mode == "auto"`` chose it (else None).
+
+    ``"auto"``: fast for more than ``AUTO_FAST_ABOVE`` spheres in ``AUTO_FAST_DIMS``, where its
+    fill matches the faithful mode's sooner; faithful for few spheres, in 4-D and up, and when
+    ``batch`` (a faithful-mode option) is not 1.
+    """
+    if mode not in ("auto", "faithful", "fast"):
+        raise ParameterError(f"mode must be 'auto', 'faithful' or 'fast', got {mode!r}")
+    if mode != "auto":
+        return mode, None
+    if batch != 1:
+        return "faithful", f"auto: batch={batch} is a faithful-mode option"
+    if dim not in AUTO_FAST_DIMS:
+        return "faithful", f"auto: {dim}-D (the fast mode fills less from 4-D up)"
+    if n <= AUTO_FAST_ABOVE:
+        return "faithful", f"auto: n={n} is at most {AUTO_FAST_ABOVE}"
+    return "fast", f"auto: n={n} is more than {AUTO_FAST_ABOVE} in {dim}-D"
 
 
 def _centers_only(shape, reach: float, name: str):
@@ -784,8 +815,6 @@ def pack_sizes(
         Verified in float64, like every packing; ``stop_reason`` is ``"count"`` when every radius
         was placed, ``"no_room"`` when some were given up.
     """
-    from .sizes import SizeDistribution
-
     shape = as_oracle(shape)
     check_compatible(shape)
     if not isinstance(distribution, SizeDistribution):

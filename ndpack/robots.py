@@ -7,7 +7,7 @@ frame; :func:`cover_urdf` covers each link with spheres (:func:`ndpack.cover`) a
   one sphere each (``<collision name="<link>_sphere_<i>">``); visuals, joints and everything else
   as they were;
 - ``<robot>_spheres.yml``: cuRobo's collision spheres file (``collision_spheres:`` link ->
-  ``[{center: [x, y, z], radius: r}, ...]``, see :func:`ndpack.formats.curobo_yaml`);
+  ``[{center: [x, y, z], radius: r}, ...]``, see :func:`ndpack.io.curobo_yaml`);
 - ``report.json``: per link the sphere count, the largest protrusion (as a length and as a share
   of the link's bounding-box diagonal), whether fresh samples were all covered, and the seconds.
 
@@ -53,7 +53,11 @@ from urllib.parse import unquote
 
 import numpy as np
 
+from .covering import CHECK_SAMPLES, Covering, check_covering, cover
 from .errors import NdpackError, ParameterError, ShapeError
+from .meshes import surface
+from .shapes.mesh import TriangleMesh
+from .shapes.primitives import Ball, Box, Cylinder
 
 #: ``nd.cover`` options :func:`cover_urdf` passes on (the rest are its own, or per shape).
 COVER_OPTIONS = ("samples", "check_samples", "backend", "device")
@@ -277,10 +281,6 @@ def _positive(element: ET.Element, attribute: str, count: int = 1) -> np.ndarray
 
 def _geometry_shape(item: ET.Element, folder: Path, packages, holes):
     """The shape of a ``<collision>`` or ``<visual>`` element in the link's frame, and what it was."""
-    from .meshes import surface
-    from .shapes.mesh import TriangleMesh
-    from .shapes.primitives import Ball, Box, Cylinder
-
     origin = item.find("origin")
     xyz = np.zeros(3) if origin is None else _numbers(origin, "xyz", 3, np.zeros(3))
     rpy = np.zeros(3) if origin is None else _numbers(origin, "rpy", 3, np.zeros(3))
@@ -482,7 +482,7 @@ def cover_urdf(path, out_dir, *, n: int | None = None, protrusion: float | None 
     yaml_out = out_dir / f"{_file_name(robot)}_spheres.yml"
     report_out = out_dir / "report.json"
     _write_sphere_urdf(path, urdf_out, coverings)
-    from .formats import curobo_yaml
+    from .io import curobo_yaml
 
     yaml_out.write_text(curobo_yaml({name: (c.centers, c.radii) for name, c in coverings.items()},
                                     comment=f"cuRobo collision spheres of {robot!r} ({path.name}), written by ndpack: "
@@ -508,13 +508,11 @@ def _file_name(name: str) -> str:
 
 def _cover_link(link: LinkGeometry, n, protrusion, protrusion_share, seed, options):
     """One Covering of all of a link's geometries: each covered on its own, the spheres joined."""
-    from .covering import CHECK_SAMPLES, Covering, check_covering, cover
-
     started = time.perf_counter()
     shapes = link.shapes
     if protrusion_share is not None:
         protrusion = protrusion_share * link.diagonal
-    counts = [None] * len(shapes) if n is None else _share_out(n, [_diagonal(shape) for shape in shapes])
+    counts = [None] * len(shapes) if n is None else _share_out(n, [shape.diagonal for shape in shapes])
     parts = [cover(shape, n=count, protrusion=protrusion, seed=seed, progress=False, **options)
              for shape, count in zip(shapes, counts)]
     if len(parts) == 1:
@@ -530,10 +528,6 @@ def _cover_link(link: LinkGeometry, n, protrusion, protrusion_share, seed, optio
     params = {"n": None if n is None else int(n), "protrusion": protrusion, "seed": int(seed),
               "parts": [part.params for part in parts], "seconds": time.perf_counter() - started}
     return Covering(centers, radii, protrusions, report, params, union)
-
-
-def _diagonal(shape) -> float:
-    return float(np.linalg.norm(np.ptp(shape.bounds, axis=0)))
 
 
 def _share_out(n: int, weights) -> list[int]:

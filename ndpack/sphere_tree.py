@@ -25,7 +25,11 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from . import ball_union
+from .boundary import sample_cells, samples as shape_samples
+from .covering import FIX_LARGEST, FIX_LARGEST_SHARE, Problem, _protrusions
 from .errors import DimensionError, ParameterError
+from .oracle import check_packable
+from .shapes.adapters import as_oracle
 
 #: Fresh sample sets drawn to close a covering tree's gaps between samples, at most.
 TREE_PASSES = 8
@@ -85,8 +89,6 @@ class SphereTree:
         sound tree); for covering trees also ``uncovered``, per level the samples outside the
         level's union; for inner trees ``enclosed``, the children not inside their parent.
         """
-        from .boundary import sample_cells, samples as shape_samples
-
         if self.kind == "inner":
             outside = 0
             for level in range(1, self.depth):
@@ -105,7 +107,7 @@ class SphereTree:
     def save(self, path) -> Path:
         """Write the sphere-tree toolkit's ``.sph``: ``levels branching``, then a line ``x y z r 1`` per
         slot, level by level, node ``i``'s children in slots ``i * branching + 1 ...``; unused
-        slots have radius 0. 3-D only; read back a level with :func:`ndpack.formats.read_sph`."""
+        slots have radius 0. 3-D only; read back a level with :func:`ndpack.io.read_sph`."""
         if self.dim != 3:
             raise DimensionError(f"the .sph format holds 3-D trees; this one is {self.dim}-D")
         path = Path(path)
@@ -136,7 +138,7 @@ def inner_tree(packing, branching: int = 8) -> SphereTree:
 
     The spheres are split into at most ``branching`` groups of balanced size along the widest
     axis, recursively, so the tree has ``ceil(log_b n) + 1`` levels; each node is a sphere
-    enclosing its children's (:func:`ndpack.formats.enclosing_sphere`). Nodes with one child
+    enclosing its children's (:func:`ndpack.ball_union.enclosing_sphere`). Nodes with one child
     are that child.
 
     Parameters
@@ -145,8 +147,6 @@ def inner_tree(packing, branching: int = 8) -> SphereTree:
     branching : int
         At least 2.
     """
-    from .formats import enclosing_sphere
-
     _check_branching(branching)
     centers, radii = np.asarray(packing.centers, dtype=np.float64), np.asarray(packing.radii, dtype=np.float64)
     if not len(radii):
@@ -167,7 +167,7 @@ def inner_tree(packing, branching: int = 8) -> SphereTree:
     tree_centers, tree_radii = [centers[order]], [radii[order]]
     for level in range(depth - 2, -1, -1):
         below_c, below_r, below_parent = tree_centers[0], tree_radii[0], parents[level + 1]
-        spheres = [enclosing_sphere(below_c[below_parent == node], below_r[below_parent == node])
+        spheres = [ball_union.enclosing_sphere(below_c[below_parent == node], below_r[below_parent == node])
                    for node in range(len(groups[level]))]
         tree_centers.insert(0, np.array([sphere[0] for sphere in spheres]))
         tree_radii.insert(0, np.array([sphere[1] for sphere in spheres]))
@@ -209,10 +209,6 @@ def covering_tree(shape, branching: int = 8, depth: int = 3, *, samples: int = 2
     SphereTree
         Its ``protrusion`` lists each level's largest ``r + f(c)``.
     """
-    from .covering import FIX_LARGEST, FIX_LARGEST_SHARE, Problem, _protrusions
-    from .oracle import check_packable
-    from .shapes.adapters import as_oracle
-
     _check_branching(branching)
     if isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or depth < 1:
         raise ParameterError(f"depth must be a positive integer, got {depth!r}")

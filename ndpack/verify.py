@@ -22,6 +22,7 @@ from scipy.spatial import cKDTree
 from .errors import DimensionError, NdpackError, ParameterError
 from .oracle import as_points
 from .period import period_of
+from .shapes.adapters import as_oracle
 
 #: Default tolerance, as a fraction of the shape's scale: float64 rounding of distances is about
 #: 1e-16 of it, and the driver keeps a margin of 1e-10 (ndpack.protosphere.SAFETY_MARGIN).
@@ -198,8 +199,6 @@ def verify(packing, shape=None, tol: float | None = None, radii=None, independen
         centers = packing
     if shape is None:
         raise NdpackError("verify() needs the shape: pass verify(packing, shape)")
-    from .shapes.adapters import as_oracle
-
     shape = as_oracle(shape)
     centers = as_points(centers, shape.dim) if len(centers) else np.zeros((0, shape.dim))
     radii = np.asarray(radii, dtype=np.float64)

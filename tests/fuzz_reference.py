@@ -259,9 +259,9 @@ def capped_mesh(vertices, faces, removed) -> Reference:
     included (a cap in a triangle's plane covers it). The holes' centres are anchors, so that
     the spheres next to a hole are sampled towards it."""
     closed = winding_mesh(vertices, faces)
-    centres = np.asarray(vertices, dtype=np.float64)[np.asarray(faces)[removed]].mean(axis=1)
-    near = _nearest_vertices(np.vstack([np.asarray(vertices, dtype=np.float64), centres]))
-    closed.anchors = lambda x: np.concatenate([near(x), np.broadcast_to(centres, (len(x),) + centres.shape)], axis=1)
+    centers = np.asarray(vertices, dtype=np.float64)[np.asarray(faces)[removed]].mean(axis=1)
+    near = _nearest_vertices(np.vstack([np.asarray(vertices, dtype=np.float64), centers]))
+    closed.anchors = lambda x: np.concatenate([near(x), np.broadcast_to(centers, (len(x),) + centers.shape)], axis=1)
     return closed
 
 

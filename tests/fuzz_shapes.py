@@ -104,7 +104,7 @@ def build(code: str):
     ``plugins`` (:mod:`fuzz_plugins`)."""
     import manifold3d as m3d
     import shapely
-    import shapely.affinity  # noqa: F401  (moves shapely geometries)
+    import shapely.affinity  # moves shapely geometries
     import trimesh
 
     import fuzz_plugins

@@ -3,9 +3,9 @@
 failed read or write loses nothing.
 
 What other files already hold is not repeated here: impossible integer parameters and bad
-shapes (test_driver.py), plug-in construction (test_plugin.py), garbage files of every format,
-missing files and foreign PLY (test_formats.py), command-line sources, outputs and random bytes
-(test_cli.py). Mesh files (NaN vertices, no faces) belong to test_mesh.py.
+shapes (test_protosphere.py), plug-in construction (shapes/test_plugin.py), garbage files of every format,
+missing files and foreign PLY (io/test_formats.py), command-line sources, outputs and random bytes
+(test_cli.py). Mesh files (NaN vertices, no faces) belong to shapes/test_mesh.py.
 """
 
 import os
@@ -45,7 +45,7 @@ def one_line(error) -> str:
     ("batch", INF, "batch must be a positive integer"),
     ("restarts", NAN, "restarts must be a non-negative integer"),
     ("seed", NAN, "seed must be None, an integer >= 0"),
-    ("mode", None, "mode must be 'faithful' or 'fast'"),
+    ("mode", None, "mode must be 'auto', 'faithful' or 'fast'"),
     ("time_budget", INF, "time_budget must be"),
     ("grid", NAN, "grid must be"),
     ("grid", INF, "grid must be"),

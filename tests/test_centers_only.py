@@ -17,7 +17,7 @@ def disjoint(packing):
 
 
 @pytest.mark.parametrize("backend", ["numpy", "numba"])
-def test_centres_inside_and_spheres_through_the_walls(backend):
+def test_centers_inside_and_spheres_through_the_walls(backend):
     radius = 0.06
     packing = nd.pack(CYLINDER, n=150, mode="fast", min_radius=radius, max_radius=radius, centers_only=True,
                       backend=backend, on_invalid="raise")
@@ -32,12 +32,12 @@ def test_centres_inside_and_spheres_through_the_walls(backend):
     assert not nd.verify(packing, centers_only=False).ok
 
 
-def test_centres_only_packs_more_equal_spheres_than_walls():
+def test_centers_only_packs_more_equal_spheres_than_walls():
     options = dict(n=100_000, mode="fast", min_radius=0.04, max_radius=0.04, backend="numba")
     walls = nd.pack(CYLINDER, **options)
-    centres = nd.pack(CYLINDER, centers_only=True, **options)
-    assert walls.stop_reason == centres.stop_reason == "min_radius"
-    assert len(centres) > 1.1 * len(walls)
+    centers = nd.pack(CYLINDER, centers_only=True, **options)
+    assert walls.stop_reason == centers.stop_reason == "min_radius"
+    assert len(centers) > 1.1 * len(walls)
 
 
 def test_a_distribution_by_centre_keeps_its_shares():
@@ -51,7 +51,7 @@ def test_a_distribution_by_centre_keeps_its_shares():
         assert abs(size.volume_share - size.target) <= 0.05 * size.target, report
 
 
-def test_centres_only_needs_a_largest_radius():
+def test_centers_only_needs_a_largest_radius():
     with pytest.raises(nd.ParameterError, match="needs max_radius"):
         nd.pack(CYLINDER, n=10, centers_only=True)
     with pytest.raises(nd.ParameterError, match="periodic"):

@@ -36,7 +36,7 @@ def test_bad_shape_spec_gives_one_line_and_nonzero_exit():
     result = run("pack", "box:dim")
     assert result.returncode == 2 and "key=value" in result.stderr
     # A parameter the shape does not take: named, with the ones it does take.
-    from ndpack.builtin import from_spec
+    from ndpack.named_shapes import from_spec
 
     with pytest.raises(nd.NdpackError, match=r"does not take size; it takes dim=3"):
         from_spec("box:dim=3,size=2")
@@ -322,17 +322,17 @@ def test_a_save_that_fails_late_keeps_the_packing(tmp_path, monkeypatch, capsys)
     """A disk that fills up after the check: the packing goes beside the output instead."""
     import errno
 
-    from ndpack import cli, formats
+    from ndpack import cli, io as ndio
 
     wanted = tmp_path / "square.csv"
-    save = formats.save
+    save = ndio.save
 
     def full_disk(packing, path, *args, **kwargs):
         if str(path) == str(wanted):
             raise OSError(errno.ENOSPC, "No space left on device", str(path))
         return save(packing, path, *args, **kwargs)
 
-    monkeypatch.setattr(formats, "save", full_disk)
+    monkeypatch.setattr(ndio, "save", full_disk)
     assert cli.main(["pack", "square", "-n", "20", "--backend", "numpy", "--grid", "8", "-q", "-o", str(wanted)]) == 2
     line = capsys.readouterr().err.strip().splitlines()[-1]
     assert "No space left" in line and f"kept in {wanted}.npz" in line, line

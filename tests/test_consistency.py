@@ -101,11 +101,11 @@ def test_a_wrong_volume_fails_a_real_run_and_keeps_its_spheres(monkeypatch):
 
 
 def test_the_command_line_keeps_an_invalid_packing_and_flags_an_impossible_file(tmp_path, monkeypatch, capsys):
-    from ndpack import cli, sources
+    from ndpack import cli, shape_sources
 
     holed = holed_disc()
     holed._slope_checked = True
-    monkeypatch.setattr(sources, "load_shape", lambda source, holes=None, sign=None: holed)
+    monkeypatch.setattr(shape_sources, "load_shape", lambda source, holes=None, sign=None: holed)
     out = tmp_path / "holed.npz"
     assert cli.main(["pack", "holed.py", "-n", "20", "--mode", "fast", "--grid", "24", "-q", "-o", str(out)]) == 2
     line = capsys.readouterr().err.strip()

@@ -6,7 +6,7 @@ import trimesh
 from scipy.spatial import cKDTree
 
 import ndpack as nd
-from ndpack.formats import read_sph
+from ndpack.io import read_sph
 from ndpack.sphere_tree import covering_tree, inner_tree
 
 FAST = dict(samples=6000, check_samples=20000)
@@ -81,7 +81,7 @@ def test_polygon_outline_is_covered():
 def test_mesh_is_covered_and_spheres_reach_out_no_farther_than_asked():
     capsule = trimesh.creation.capsule(height=0.3, radius=0.08, count=[24, 24])
     mesh = nd.TriangleMesh(capsule.vertices, capsule.faces)
-    diagonal = float(np.linalg.norm(np.ptp(mesh.bounds, axis=0)))
+    diagonal = mesh.diagonal
     tolerance = 0.01 * diagonal
     covering = nd.cover(mesh, protrusion=tolerance, **FAST)
     assert covering.report.covered
@@ -225,10 +225,10 @@ def test_open_mesh_covering_says_so_and_a_saved_covering_verifies_as_one(tmp_pat
     assert main(["verify", str(out)]) == 0
     assert "a covering of" in capsys.readouterr().out
     # Spheres shrunk by a tenth leave gaps: verify must say so and fail.
-    saved = nd.formats.load(out)
+    saved = nd.io.load(out)
     saved.radii[:] *= 0.9
     shrunk = tmp_path / "shrunk.npz"
-    nd.formats.save(saved, shrunk)
+    nd.io.save(saved, shrunk)
     assert main(["verify", str(shrunk)]) == 1
     assert "NOT COVERED" in capsys.readouterr().out
     assert main(["info", str(out)]) == 0

@@ -1,10 +1,16 @@
-"""The Python snippets in the user documentation run as written, and its links lead somewhere.
+"""The user documentation runs as written, and its links lead somewhere.
 
-Each page's ```python blocks run in order, as one script, in a subprocess and a temporary folder
-that holds the mesh files the pages name (:data:`MESH_FILES`), on the NumPy backend unless a
-snippet names another. To keep the whole file near a minute on 2 cores, ``nd.pack`` is wrapped
-(:data:`PRELUDE`): at most :data:`MAX_SPHERES` spheres, and a coarse grid unless the snippet
-sets one; everything else runs as printed. A block right after the line ``<!-- not run -->``
+Each page's steps run in order, as one script, in a subprocess and a temporary folder that holds
+the sample files (``ndpack samples``, as the pages tell a reader to make them): its ```python
+blocks as written (one whose first line is ``# name.py`` is saved as that file), and the
+``ndpack`` commands of its ```bash and ```console blocks through ``ndpack.cli.main`` (other
+commands, such as ``pip``, are skipped); each must exit 0. A console
+block's printed lines must match what the command prints (``...`` matches anything), unless the
+block follows ``<!-- output varies -->`` (a machine's backends). Steps run on the NumPy backend
+unless they name another, and console blocks on numba, which their output names. To keep the
+whole file near a minute on 2 cores, ``nd.pack`` is wrapped (:data:`PRELUDE`): at most
+:data:`MAX_SPHERES` spheres, and a coarse grid unless the step sets one; console blocks run
+uncapped, so their figures are the real ones. A block right after the line ``<!-- not run -->``
 is skipped (a signature, or a fragment that needs files the reader has and the test does not).
 """
 
@@ -19,15 +25,15 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs"
 MESHES = ROOT / "tests" / "data" / "meshes"
-#: The mesh files the pages name, made from the small copies the tests keep.
-MESH_FILES = {"cow.obj": "cow.ply", "armadillo.obj": "armadillo-20k.ply", "fandisk.obj": "fandisk.ply"}
-
-#: Pages whose snippets must run.
-PAGES = ["quickstart.md", "guide.md", "plugins.md", "formats.md", "backends.md", "meshes.md", "dem.md", "collision.md"]
+#: Pages whose steps must run (README.md is in the repository's root).
+PAGES = ["README.md", "quickstart.md", "guide.md", "plugins.md", "formats.md", "backends.md", "meshes.md", "dem.md",
+         "collision.md"]
 
 MAX_SPHERES = 150
 SKIP_MARK = "<!-- not run -->"
-BLOCK = re.compile(r"^```python\n(.*?)^```", re.S | re.M)
+VARIES_MARK = "<!-- output varies -->"
+FILE_BLOCK = re.compile(r"# ([\w.-]+\.py)\n")
+BLOCK = re.compile(r"^[ ]*```(python|bash|console)\n(.*?)^[ ]*```", re.S | re.M)
 
 #: Runs before a page's snippets: nd.pack with fewer spheres and a coarse grid.
 PRELUDE = f"""
@@ -39,11 +45,15 @@ _pack = ndpack.pack
 
 @functools.wraps(_pack)
 def _small_pack(shape, n=1000, **options):
+    if not _CAPPED[0]:
+        return _pack(shape, n, **options)
     options.setdefault("grid", 10)
     return _pack(shape, min(int(n), {MAX_SPHERES}), **options)
 
 
 ndpack.pack = _small_pack
+ndpack.protosphere.pack = _small_pack  # what `ndpack pack` calls
+_CAPPED = [True]  # console blocks run uncapped: their printed figures are the real ones
 
 _pack_sizes = ndpack.pack_sizes
 
@@ -66,22 +76,94 @@ def _small_cover(shape, *args, **options):  # coverings on fewer samples (their 
 
 
 ndpack.cover = _small_cover
+ndpack.covering.cover = _small_cover  # what `ndpack cover` calls
 
 import ndpack.sphere_tree
 ndpack.sphere_tree.covering_tree = functools.partial(ndpack.sphere_tree.covering_tree, samples=2000)
+
 """
+
+#: Runs after the prelude: how a page's command-line steps run.
+RUNNER = r"""
+import contextlib, io, os, re, shlex, warnings
+import ndpack.cli
+
+
+def _ndpack(words, line):  # `ndpack WORDS` through the CLI's main, as the program runs it: must exit 0
+    with warnings.catch_warnings():
+        warnings.showwarning = ndpack.cli._warn_in_one_line
+        status = ndpack.cli.main(words)
+    assert status == 0, f"`{line}` exited {status}"
+
+
+def _commands(block):  # each line of a bash block: its `ndpack` commands run, others (pip, python) not
+    for line in block.replace("\\\n", " ").splitlines():
+        words = shlex.split(line, comments=True)
+        while words:
+            cut = words.index("&&") if "&&" in words else len(words)
+            command, words = words[:cut], words[cut + 1:]
+            if command and command[0] == "ndpack":
+                _ndpack(command[1:], line)
+
+
+def _console(block, compare):  # each `$ ndpack ...`, uncapped on numba: its lines must match the printed
+    for run in re.split(r"^\$ ", block, flags=re.M)[1:]:
+        line, *shown = run.rstrip("\n").split("\n")
+        printed = io.StringIO()
+        _CAPPED[0], os.environ["NDPACK_BACKEND"] = False, "numba"
+        try:
+            with contextlib.redirect_stdout(printed):
+                _ndpack(shlex.split(line)[1:], line)
+        finally:
+            _CAPPED[0], os.environ["NDPACK_BACKEND"] = True, "numpy"
+        got = printed.getvalue().rstrip("\n").split("\n")
+        print(printed.getvalue(), end="")
+        if compare:
+            same = len(got) == len(shown) and all(
+                re.fullmatch(re.escape(want).replace(re.escape("..."), ".*"), have) for want, have in zip(shown, got))
+            assert same, f"`{line}` printed, unlike the page:\n" + "\n".join(got)
+"""
+
+
+def page_path(name: str) -> Path:
+    return ROOT / name if name == "README.md" else DOCS / name
+
+
+def steps(page: Path) -> list[tuple[str, str, bool]]:
+    """The page's runnable blocks, in order: (``"python"``, ``"bash"``, ``"console"`` or ``"file"``
+    (a python block whose first line names its file: ``# part.py``), the block's text, whether a
+    console block's output is compared)."""
+    text = page.read_text()
+    found = []
+    for match in BLOCK.finditer(text):
+        before = text[: match.start()].rstrip().splitlines()
+        mark = before[-1].strip() if before else ""
+        if mark == SKIP_MARK:
+            continue
+        indent = len(match.group(0)) - len(match.group(0).lstrip(" "))
+        body = "\n".join(line[indent:] for line in match.group(2).splitlines()) + "\n"
+        kind = match.group(1)
+        if kind == "python" and FILE_BLOCK.match(body):
+            kind = "file"  # a file the reader saves (``# notched.py``), which a later step uses
+        found.append((kind, body, mark != VARIES_MARK))
+    return found
 
 
 def snippets(page: Path) -> list[str]:
     """The page's runnable ```python blocks, in order."""
-    text = page.read_text()
-    blocks = []
-    for match in BLOCK.finditer(text):
-        before = text[: match.start()].rstrip().splitlines()
-        if before and before[-1].strip() == SKIP_MARK:
-            continue
-        blocks.append(match.group(1))
-    return blocks
+    return [body for kind, body, _ in steps(page) if kind == "python"]
+
+
+def step_script(page: Path) -> str:
+    """The page's steps as one Python script (after :data:`PRELUDE`)."""
+    parts = []
+    for i, (kind, body, compare) in enumerate(steps(page)):
+        if kind == "file":
+            code = f"open({FILE_BLOCK.match(body).group(1)!r}, 'w').write({body!r})"
+        else:
+            code = {"python": body, "bash": f"_commands({body!r})", "console": f"_console({body!r}, {compare})"}[kind]
+        parts.append(f"# --- block {i + 1} ({kind})\n{code}")
+    return PRELUDE + RUNNER + "\n\n".join(parts)
 
 
 def test_the_prelude_caps_what_it_should(tmp_path):
@@ -91,22 +173,31 @@ def test_the_prelude_caps_what_it_should(tmp_path):
     assert snippets(DOCS / "guide.md"), "the guide lost its snippets, or the pattern no longer finds them"
 
 
-@pytest.mark.parametrize("name", [page for page in PAGES if (DOCS / page).exists()])
-def test_page_snippets_run(name, tmp_path):
-    import trimesh
+def test_console_blocks_are_compared_and_a_wrong_figure_fails(tmp_path):
+    """The comparison of a console block can fail: a fill the command does not print is caught."""
+    block = "$ ndpack pack box:dim=2 -n 3 --grid 8\nshape:    ...\nspheres:  3 (the count asked for)\n" \
+            "fill:     0.1234\nverified: ...\nsaved:    ...\ntime:     ...\n"
+    script = PRELUDE + RUNNER + f"_console({block!r}, True)\n"
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert result.returncode != 0 and "fill:" in result.stderr, result.stderr[-2000:]
+    right = PRELUDE + RUNNER + f"_console({block.replace('0.1234', '...')!r}, True)\n"
+    result = subprocess.run([sys.executable, "-c", right], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr[-2000:]
 
-    blocks = snippets(DOCS / name)
-    if not blocks:
-        pytest.skip(f"{name} has no Python snippets")
-    for name_here, source in MESH_FILES.items():
-        trimesh.load(MESHES / source, force="mesh").export(tmp_path / name_here)
-    script = PRELUDE + "\n\n".join(f"# --- block {i + 1}\n{block}" for i, block in enumerate(blocks))
-    (tmp_path / "snippets.py").write_text(script)
+
+@pytest.mark.parametrize("name", [page for page in PAGES if page_path(page).exists()])
+def test_page_steps_run_in_order(name, tmp_path):
+    import ndpack.samples
+
+    if not steps(page_path(name)):
+        pytest.skip(f"{name} has no steps")
+    ndpack.samples.write(tmp_path)  # the pages' meshes, as `ndpack samples` makes them
+    (tmp_path / "steps.py").write_text(step_script(page_path(name)))
     result = subprocess.run(
-        [sys.executable, "snippets.py"], cwd=tmp_path, capture_output=True, text=True, timeout=600,
+        [sys.executable, "steps.py"], cwd=tmp_path, capture_output=True, text=True, timeout=900,
         env={**os.environ, "MPLBACKEND": "Agg", "NDPACK_BACKEND": "numpy"},
     )
-    assert result.returncode == 0, f"a snippet in docs/{name} failed:\n{result.stderr[-3000:]}"
+    assert result.returncode == 0, f"a step in {name} failed:\n{result.stderr[-3000:]}"
 
 
 def test_links_between_pages_resolve():

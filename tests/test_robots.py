@@ -255,7 +255,7 @@ def test_spheres_cover_each_link_in_its_frame(robot):
         covering = result.links[name]
         report = nd.check_covering(reference, covering.centers, covering.radii, samples=8000, seed=7)
         assert report.covered, (name, report.summary())
-        diagonal = float(np.linalg.norm(np.ptp(reference.bounds, axis=0)))
+        diagonal = reference.diagonal
         reach = covering.radii + reference.distance(covering.centers)
         assert reach.max() <= SHARE * diagonal * (1 + 1e-6), (name, reach.max() / diagonal)
     # The arm's spheres are in the link's frame: they do not cover the mesh where its file puts it.

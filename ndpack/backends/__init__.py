@@ -31,6 +31,7 @@ import importlib
 import os
 
 from ..errors import BackendError
+from ..kernels.compiled import has_kernel
 from .base import Backend
 
 #: name -> (module, class, pip install hint)
@@ -121,20 +122,30 @@ def _cuda_driver_present() -> bool:
 
 
 def _fastest(shape, device, **options) -> Backend:
-    from .base import has_kernel
-
     gpu = _cuda_driver_present() and device != "cpu"
+    wants_gpu = device is not None and str(device).lower() != "cpu"
+    why_not = {}  # GPU backend -> why it cannot run here, for a device asked for in vain
     for name in _PREFERENCE:
+        if wants_gpu and name not in _GPU:
+            break
         if name in _GPU and not gpu:
+            why_not[name] = "no CUDA driver on this machine"
             continue
         if name != "numpy" and shape is not None and not has_kernel(shape):
+            why_not[name] = "the shape has no compiled kernel (a NumPy-only plug-in)"
             continue
         if os.environ.get("NUMBA_ENABLE_CUDASIM") == "1" and name == "numba-cuda":
+            why_not[name] = "NUMBA_ENABLE_CUDASIM=1 (the simulator, not a device)"
             continue  # the simulator works but is far slower than the CPU backends
         try:
             return _create(name, device if name in _GPU else None, **(options if name == "warp" else {}))
-        except Exception:  # noqa: BLE001 - a missing or broken GPU stack must not stop a CPU packing
+        except Exception as error:  # noqa: BLE001 - a missing or broken GPU stack must not stop a CPU packing
+            why_not[name] = str(error).split("\n")[0]
             continue
+    if wants_gpu:  # a device asked for is never dropped in silence: the CPU backends would ignore it
+        reasons = "; ".join(f"{name}: {why}" for name, why in why_not.items())
+        raise BackendError(f"device {device!r} asked for, but no GPU backend can run here ({reasons}); leave out "
+                           f"the device, or give 'cpu', to pack on the CPU")
     return _create("numpy")
 
 

@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .prototypes import HostPrototypes, best_starts
+
 
 class Backend:
     """Base class: the operations the ProtoSphere driver needs, on NumPy arrays in and out."""
@@ -102,8 +104,6 @@ class Backend:
         """:meth:`converge`'s starting points, for backends that choose them apart from converging."""
         if starts is None or len(starts) == 0:
             return points
-        from .prototypes import best_starts
-
         return best_starts(self, shape, np.concatenate([points[None], starts]), centers, radii, neighbours)[0]
 
     def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
@@ -150,8 +150,6 @@ class Backend:
         CPU backends keep it on the host; GPU backends override this to keep it on their device.
         Arguments as in :class:`~ndpack.backends.prototypes.Prototypes`.
         """
-        from .prototypes import HostPrototypes
-
         return HostPrototypes(self, shape, cell_lower, cell_upper, reach, points, clearance, wall)
 
     def __repr__(self) -> str:
@@ -182,79 +180,3 @@ def staging_rows(current: int, need: int) -> int:
     memory waits for the device (116 regrowths took 0.33 s of a 4.5 s packing on an H100 when each
     grew to the need alone; starting at 256 rows, 81 regrowths still took 0.17 s of 2.9 s)."""
     return max(need, 2 * current if current else FIRST_STAGING_ROWS)
-
-
-def no_wall(count: int) -> np.ndarray:
-    """(count,) walls that never spare a distance evaluation (see :meth:`Backend.converge`)."""
-    return np.full(count, -np.inf)
-
-
-#: How the compiled backends get a shape's distance: "tape" (the default: numbers for the
-#: interpreter of its dimension, nothing to compile for a new shape) or "specialised" (code
-#: generated for the tree, compiled for each new tree; see ndpack.kernels.program).
-KERNEL_MODES = ("tape", "specialised")
-
-
-def kernel_mode() -> str:
-    """``$NDPACK_KERNELS``, or "tape"; checked."""
-    import os
-
-    from ..errors import BackendError
-
-    mode = os.environ.get("NDPACK_KERNELS") or "tape"
-    if mode not in KERNEL_MODES:
-        raise BackendError(f"NDPACK_KERNELS must be one of {', '.join(KERNEL_MODES)}, got {mode!r}")
-    return mode
-
-
-def compiled_program(shape):
-    """What the compiled backends run for ``shape`` (:class:`~ndpack.kernels.tape.Flat`: the
-    program and the shape's numbers), made once per shape and :func:`kernel_mode`.
-
-    A tree too deep for the tape falls back to a specialised program.
-
-    Raises
-    ------
-    BackendError
-        If the shape has no scalar kernel (a NumPy-only plug-in), saying what to do.
-    """
-    from ..errors import KernelError
-    from ..kernels.program import build
-    from ..kernels.tape import Flat, TapeTooDeep, flatten
-
-    mode = kernel_mode()
-    made = shape.__dict__.setdefault("_ndpack_flat", {})
-    if mode not in made:
-        try:
-            flat = None
-            if mode == "tape":
-                try:
-                    flat = flatten(shape)
-                except TapeTooDeep:  # compiled for itself instead
-                    pass
-            if flat is None:
-                program = build(shape)
-                flat = Flat(program, program.param_array(), program.device_values)
-        except KernelError as error:
-            from ..errors import BackendError
-            from ..shapes.plugin import Function, tree
-            from ..shapes.scalar import ScalarFunction
-
-            numpy_only = any(isinstance(node, Function) and not isinstance(node, ScalarFunction)
-                             for node in tree(shape))
-            advice = ("Use backend='numpy', or write the plug-in as a scalar function (ndpack.ScalarFunction) "
-                      "so it compiles for every backend" if numpy_only else "Use backend='numpy'")
-            raise BackendError(f"{shape!r} cannot run on a compiled backend: {error}. {advice}") from None
-        made[mode] = flat
-    return made[mode]
-
-
-def has_kernel(shape) -> bool:
-    """Whether ``shape`` compiles to a scalar kernel (so the compiled backends can run it)."""
-    from ..errors import BackendError
-
-    try:
-        compiled_program(shape)
-    except BackendError:
-        return False
-    return True

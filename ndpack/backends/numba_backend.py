@@ -2,79 +2,24 @@
 
 The kernels of a dimension compile once per machine, for every shape of built-ins (a tape, see
 :mod:`ndpack.kernels.tape`), and are loaded from disk afterwards; the per-point
-work is shared with the CUDA backend (:mod:`ndpack.backends.numba_kernels`). float64 throughout.
+work is shared with the CUDA backend (:mod:`ndpack.backends.numba_kernels`, compiled through
+:mod:`ndpack.backends.numba_common`). float64 throughout.
 The spheres near a prototype's cell, and the prototypes a round's spheres touch, are found through
 a sphere index (:mod:`ndpack.backends.sphere_index`), so neither costs a pass over every sphere.
 """
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
-from pathlib import Path
-
 import numpy as np
 
-from .base import Backend, compiled_program, no_wall
+from ..kernels.compiled import compiled_program
+from .base import Backend
+from .numba_common import FD_STEP, compile_geometry_beside, geometry_kernels, program_kernels
+from .prototypes import no_wall
+from .sphere_index import SphereIndex
 
-#: The per-point functions, as text (see numba_kernels.py).
-KERNELS = Path(__file__).with_name("numba_kernels.py").read_text()
-
-#: Entry points: a parallel loop over prototypes (or boxes) calling the per-point functions.
-ENTRIES = '''
-def clearance_all(points, prm, centers, radii, nbr, h, out, out_direction):
-    for i in prange(points.shape[0]):
-        clearance_one(i, points, prm, centers, radii, nbr, h, out, out_direction)
-
-
-def converge_all(points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, out_points,
-                 out_clearance):
-    for i in prange(points.shape[0]):
-        converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, out_points,
-                     out_clearance)
-
-
-def touched_all(points, clearance, centers, radii, out):
-    for i in prange(points.shape[0]):
-        touched_one(i, points, clearance, centers, radii, out)
-
-
-def index_insert_range(start, stop, centers, radii, origin, top, heads, nxt, level_of, level_head, level_next,
-                       level_count, level_rmax):
-    for s in range(start, stop):
-        index_insert(s, centers, radii, origin, top, heads, nxt, level_of, level_head, level_next, level_count,
-                     level_rmax)
-
-
-def index_query(lower, upper, bound, counting, centers, radii, origin, top, heads, nxt, level_of, level_head,
-                level_next, level_count, level_rmax, counts, out):
-    for b in prange(lower.shape[0]):
-        # counting 0: tighten bound[b] (and put the sphere that did in out[b, 0], if out has a
-        # column); 1: count the spheres within it, the first of them in out[b] (one kernel for
-        # all: each parallel entry costs seconds to compile on first use).
-        if counting == 0:
-            bound[b] = index_near(b, lower, upper, bound[b], 0, centers, radii, origin, top, heads, nxt, level_of,
-                                  level_head, level_next, level_count, level_rmax, out, b, out.shape[1])[0]
-        else:
-            counts[b] = index_near(b, lower, upper, bound[b], 1, centers, radii, origin, top, heads, nxt, level_of,
-                                   level_head, level_next, level_count, level_rmax, out, b, out.shape[1])[1]
-'''
-
-#: Central-difference step, as a fraction of the shape's scale: float64 rounding in the
-#: difference is about 1e-16 / 1e-6 of the gradient, truncation about 1e-12 for unit curvature.
-FD_STEP = 1e-6
 #: Above this many new spheres, :meth:`NumbaBackend.touched` indexes them instead of testing all.
 INDEX_NEW_SPHERES = 32
-ENTRY_NAMES = ("clearance_all", "converge_all", "touched_all", "index_query")
-
-
-def _jit(namespace, names):
-    import numba
-
-    for name in names:
-        parallel = name in ENTRY_NAMES
-        namespace[name] = numba.njit(parallel=parallel, cache=True)(namespace[name])
 
 
 class NumbaBackend(Backend):
@@ -99,7 +44,7 @@ class NumbaBackend(Backend):
     def _kernels(self, shape):
         """The compiled namespace that runs ``shape``, its numbers and its finite-difference step."""
         flat = compiled_program(shape)
-        _compile_geometry_beside(shape.dim)
+        compile_geometry_beside(shape.dim)
         return program_kernels(flat.program), flat.params, FD_STEP * shape.scale
 
     def _run(self, function, *args):
@@ -187,8 +132,6 @@ class NumbaBackend(Backend):
 
     def _index(self, dim):
         """The sphere index of this backend's current packing (one per dimension)."""
-        from .sphere_index import SphereIndex
-
         if dim not in self._indexes:
             self._indexes[dim] = SphereIndex(geometry_kernels(dim)["index_insert_range"])
         return self._indexes[dim]
@@ -201,8 +144,6 @@ class NumbaBackend(Backend):
             self._run(namespace["touched_all"], points, clearance, _f64(new_centers), _f64(new_radii), out)
             return out
         # Many new spheres (a large batch): index them, so each prototype looks only nearby.
-        from .sphere_index import SphereIndex
-
         new_centers, new_radii = _f64(new_centers), _f64(new_radii)
         index = SphereIndex(namespace["index_insert_range"]).sync(new_centers, new_radii)
         bound = clearance.copy()
@@ -212,68 +153,9 @@ class NumbaBackend(Backend):
         return nearest[:, 0]
 
 
-_namespaces = {}  # id(program) -> (program, namespace)
-
-
-def program_kernels(program):
-    """The backend's kernels compiled with ``program`` (cached: in this process, and on disk by
-    Numba)."""
-    from ..kernels.compile import numba_namespace
-
-    if id(program) not in _namespaces:
-        _namespaces[id(program)] = (program, numba_namespace(program, "cpu", KERNELS + ENTRIES, _jit))
-    return _namespaces[id(program)][1]
-
-
-def geometry_kernels(dim, wait: bool = True):
-    """The shape-free kernels (near_spheres, touched) for dimension ``dim``: those of the tape
-    interpreter's namespace, which the shapes of built-ins share. Where a second process is
-    compiling them (:func:`_compile_geometry_beside`), waits for it first (unless not ``wait``)."""
-    from ..kernels.tape import interpreter
-
-    helper = _helpers.get(dim)
-    if wait and helper is not None:
-        _helpers[dim] = None
-        try:
-            helper.wait(timeout=900)
-        except subprocess.TimeoutExpired:  # compile here then; the helper's cache entries are never half-written
-            helper.kill()
-    return program_kernels(interpreter(dim))
-
-
-#: The shape-free entry points every packing calls.
-GEOMETRY_ENTRIES = ("index_query", "touched_all", "index_insert_range")
-_helpers = {}  # dim -> the process compiling them, or None
-
-
-def _compile_geometry_beside(dim: int) -> None:
-    """Where this machine has not compiled the shape-free kernels of ``dim`` yet, compile them in
-    a second process while this one compiles the shape's: a first packing then waits for two
-    compilers side by side, not one after the other (a first ``ndpack pack`` on 2 cores: 17 s ->
-    12 s, docs/benchmarks.md "Start-up"). Numba's disk cache hands the result over."""
-    if dim in _helpers:
-        return
-    _helpers[dim] = None
-    namespace = geometry_kernels(dim, wait=False)
-    if (os.cpu_count() or 1) < 2 or all(_on_disk(namespace[name]) for name in GEOMETRY_ENTRIES):
-        return
-    command = f"from ndpack.backends.numba_backend import warm_geometry; warm_geometry({int(dim)})"
-    try:
-        _helpers[dim] = subprocess.Popen([sys.executable, "-c", command], stdin=subprocess.DEVNULL,
-                                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    except OSError:  # no second process here: this one compiles them when they are first used
-        pass
-
-
-def _on_disk(dispatcher) -> bool:
-    """Whether Numba's disk cache holds compiled code of ``dispatcher`` (unknown: True)."""
-    index = getattr(getattr(getattr(dispatcher, "_cache", None), "_cache_file", None), "_index_path", None)
-    return index is None or os.path.exists(index)
-
-
 def warm_geometry(dim: int) -> None:
     """Compile (or load) the shape-free kernels of ``dim`` by running them on a few spheres, with
-    the argument types a packing passes: what :func:`_compile_geometry_beside`'s process runs."""
+    the argument types a packing passes: what :func:`compile_geometry_beside`'s process runs."""
     rng = np.random.default_rng(0)
     backend = NumbaBackend()
     centers, radii = rng.random((40, dim)), np.full(40, 0.01)

@@ -18,10 +18,13 @@ import weakref
 import numpy as np
 
 from ..errors import BackendError
-from .base import Backend, compiled_program, no_wall, staging_rows, tightened_reach
+from ..kernels.compile import CudaKernel, numba_namespace
+from ..kernels.compiled import compiled_program
+from ..kernels.tape import interpreter
+from .base import Backend, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
-from .prototypes import SPREAD_MAX
-from .numba_backend import FD_STEP, KERNELS
+from .numba_common import FD_STEP, KERNELS
+from .prototypes import SPREAD_MAX, DevicePrototypes, no_wall
 
 ENTRIES = '''
 def clearance_all(points, prm, centers, radii, nbr, h, out, out_direction):
@@ -267,8 +270,6 @@ class NumbaCudaBackend(Backend):
         )
 
     def _jit(self, namespace, names):
-        from ..kernels.compile import CudaKernel
-
         cuda = self.cuda
         for name in names:
             if name in ENTRY_NAMES:  # kept on disk, with the device functions compiled into them
@@ -285,8 +286,6 @@ class NumbaCudaBackend(Backend):
         return self._program_kernels(flat.program), self._params[shape], FD_STEP * shape.scale
 
     def _program_kernels(self, program):
-        from ..kernels.compile import numba_namespace
-
         if id(program) not in self._namespaces:
             namespace = numba_namespace(program, "cuda", KERNELS + ENTRIES + STORE_ENTRIES, self._jit)
             self._namespaces[id(program)] = (program, namespace)
@@ -295,8 +294,6 @@ class NumbaCudaBackend(Backend):
     def _geometry(self, dim):
         """The shape-free kernels (near_spheres, touched) for dimension ``dim``: those of the
         tape interpreter's namespace, which the shapes of built-ins share."""
-        from ..kernels.tape import interpreter
-
         return self._program_kernels(interpreter(dim))
 
     def _launch(self, kernel, count, *args, stream=0):
@@ -359,8 +356,6 @@ class NumbaCudaBackend(Backend):
 
     def prototypes(self, shape, cell_lower, cell_upper, reach, points, clearance, wall=None):
         """The prototypes on the GPU (see :class:`~ndpack.backends.prototypes.DevicePrototypes`)."""
-        from .prototypes import DevicePrototypes
-
         return DevicePrototypes(_CudaDevice(self, shape), cell_lower, cell_upper, reach, points, clearance, wall,
                                 spread=self.move_spread)
 

@@ -17,7 +17,6 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .base import no_wall
 from .sphere_index import DeviceIndex
 
 #: :meth:`DevicePrototypes.leaders` asks for the prototypes within a window (this fraction) below
@@ -46,6 +45,12 @@ class PolishAhead:
     def later(self) -> PolishAhead:
         """The same polish for the moves after the first, which polished ``ids`` already."""
         return replace(self, ids=self.ids[:0])
+
+
+def no_wall(count: int) -> np.ndarray:
+    """(count,) walls that never spare a distance evaluation (see
+    :meth:`ndpack.backends.base.Backend.converge`)."""
+    return np.full(count, -np.inf)
 
 
 def lane_spread(count: int, most: int = SPREAD_MAX, threads: int | None = None) -> int:
@@ -96,10 +101,10 @@ def cell_bounds(lower, upper, distance, wall_slack):
     boundary's distance at each centre less ``wall_slack`` for rounding (the wall) (k,); both from
     the centre's signed distance, ``distance(centres) -> (k,)``, which is 1-Lipschitz. The device
     kernel ``split_apply`` computes the same."""
-    centres = 0.5 * (lower + upper)
-    centre_distance = distance(centres)
+    centers = 0.5 * (lower + upper)
+    centre_distance = distance(centers)
     half_diagonal = 0.5 * np.linalg.norm(upper - lower, axis=1)
-    return centres, -centre_distance + half_diagonal, -centre_distance - wall_slack
+    return centers, -centre_distance + half_diagonal, -centre_distance - wall_slack
 
 
 class Prototypes:
@@ -315,7 +320,7 @@ class HostPrototypes(Prototypes):
         other_lower[rows, axis] = np.where(low_half, middle, lower[rows, axis])
         other_upper[rows, axis] = np.where(low_half, upper[rows, axis], middle)
         new_lower, new_upper = np.concatenate([kept_lower, other_lower]), np.concatenate([kept_upper, other_upper])
-        centres, reach, wall = cell_bounds(new_lower, new_upper, lambda at: self.backend.distance(self.shape, at),
+        centers, reach, wall = cell_bounds(new_lower, new_upper, lambda at: self.backend.distance(self.shape, at),
                                            wall_slack)
         reach = np.minimum(np.tile(self.reach[ids], 2), reach)
         self.cell_lower[ids], self.cell_upper[ids] = kept_lower, kept_upper
@@ -324,7 +329,7 @@ class HostPrototypes(Prototypes):
         self.cell_upper = np.concatenate([self.cell_upper, other_upper])
         self.reach = np.concatenate([self.reach, reach[count:]])
         self.wall = np.concatenate([self.wall, wall[count:]])
-        self.points = np.concatenate([self.points, centres[count:]])
+        self.points = np.concatenate([self.points, centers[count:]])
         self.clearance = np.concatenate([self.clearance, np.full(count, -np.inf)])
         self.polished = np.concatenate([self.polished, np.zeros(count, dtype=bool)])
         new = np.arange(len(self.reach) - count, len(self.reach))

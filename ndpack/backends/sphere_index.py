@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .numba_common import geometry_kernels
+
 #: Octaves of radius the index tells apart: from ``top`` down to ``top / 2**47``.
 LEVELS = 48
 
@@ -105,8 +107,6 @@ class DeviceIndex:
     """
 
     def __init__(self, dim: int, device):
-        from .numba_backend import geometry_kernels
-
         self.host = SphereIndex(geometry_kernels(dim)["index_insert_range"])
         self.device = device
         self.arrays = None

@@ -22,9 +22,12 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import BackendError
-from .base import Backend, compiled_program, no_wall, staging_rows, tightened_reach
+from ..kernels.compile import warp_module
+from ..kernels.compiled import compiled_program
+from ..kernels.tape import interpreter
+from .base import Backend, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
-from .prototypes import SPREAD_MAX
+from .prototypes import SPREAD_MAX, DevicePrototypes, no_wall
 
 KERNELS = Path(__file__).with_name("warp_kernels.py").read_text()
 #: Central-difference step as a fraction of the shape's scale, per precision.
@@ -96,8 +99,6 @@ class WarpBackend(Backend):
 
     def _program_module(self, program):
         """The backend's kernels and ``program`` as one Warp module, loaded on this device."""
-        from ..kernels.compile import warp_module
-
         if id(program) not in self._modules:
             self._modules[id(program)] = (program, warp_module(program, self.precision, KERNELS, self.device))
         return self._modules[id(program)][1]
@@ -105,8 +106,6 @@ class WarpBackend(Backend):
     def _geometry(self, dim):
         """The shape-free kernels (near_spheres, touched) for dimension ``dim``: those of the
         tape interpreter's module, which the shapes of built-ins share."""
-        from ..kernels.tape import interpreter
-
         return self._program_module(interpreter(dim))
 
     # ------------------------------------------------------------------ arrays
@@ -207,8 +206,6 @@ class WarpBackend(Backend):
 
     def prototypes(self, shape, cell_lower, cell_upper, reach, points, clearance, wall=None):
         """The prototypes on this backend's device (see :class:`~ndpack.backends.prototypes.DevicePrototypes`)."""
-        from .prototypes import DevicePrototypes
-
         return DevicePrototypes(_WarpDevice(self, shape), cell_lower, cell_upper, reach, points, clearance, wall,
                                 spread=self.move_spread)
 

@@ -103,6 +103,7 @@ class Tape:
         self._transforms = [[np.eye(self.dim), np.zeros(self.dim), 1.0, None]]
         self._height = 0
         self.depth = 0
+        self._surfaces = None  # the surface queries (see surface), where the tree holds a surface
 
     # ------------------------------------------------------------------ what shapes call
     def add(self, shape) -> None:
@@ -129,16 +130,24 @@ class Tape:
         """A primitive whose distance is the library ``function`` (one of :data:`LEAVES`) on ``values``."""
         self._push(LEAVES.index(function), self.params(values))
 
-    def surface(self, block: np.ndarray, resolve=None) -> None:
-        """A mesh or outline packed as ``block`` (:mod:`ndpack.meshes.layout`); ``resolve(device)``
-        gives the id of its Warp mesh, where the Warp float32 query needs one."""
-        from ..meshes import kernels, layout
+    def add_device_values(self, offset: int, count: int, resolve) -> None:
+        """Mark ``count`` numbers from ``offset`` as filled per device by ``resolve(device)`` (the
+        id of a Warp mesh, where the Warp float32 query needs one; see :class:`Flat`)."""
+        self.device_values.append((offset, count, resolve))
 
+    def surface(self, offset: int, queries) -> None:
+        """A mesh or outline whose numbers (:mod:`ndpack.meshes.layout`, placed by :meth:`params`)
+        start at ``offset``.
+
+        The surface's leaf hands over its kernels as data, since the meshes sit above this layer:
+        ``queries(program)`` adds the surface queries to the interpreter and returns the name of
+        the distance ``name(p, prm, o)``, and adds ``surface_feature``, ``surface_distance_at``
+        and ``surface_slope``, which the gradient entries call
+        (:func:`ndpack.meshes.kernels.add_interpreter_queries`).
+        """
         if self.dim not in (2, 3):
             raise KernelError(f"a surface in {self.dim}-D: meshes are 3-D and outlines 2-D")
-        offset = self.params(layout.relocate(block, self.next_offset))
-        if resolve is not None:
-            self.device_values.append((offset + kernels.MESH_ID, 4, resolve))
+        self._surfaces = queries
         self._push(SURFACE, offset)
 
     def user(self, kernel: Kernel, values) -> None:
@@ -203,7 +212,7 @@ class Tape:
         only = instructions[0] if len(instructions) == 1 else None
         params[1] = only[1] if only is not None and only[0] == SURFACE and only[2] < 0 else -1
         users = tuple(self.users[k] for k in order)
-        surfaces = bool((instructions[:, 0] == SURFACE).any())
+        surfaces = self._surfaces if (instructions[:, 0] == SURFACE).any() else None
         return Flat(interpreter(self.dim, users, surfaces), params, self.device_values)
 
 
@@ -225,43 +234,40 @@ def _code_key(kernel: Kernel) -> str:
     return hashlib.sha1(kernel._code.encode()).hexdigest()
 
 
-def interpreter(dim: int, users: tuple = (), surfaces: bool = False) -> Program:
+def interpreter(dim: int, users: tuple = (), surfaces=None) -> Program:
     """The program that evaluates any tape of dimension ``dim`` with the plug-ins ``users``, and
-    with meshes (3-D) or outlines (2-D) where ``surfaces``.
+    with meshes (3-D) or outlines (2-D) where ``surfaces`` is given: the function that adds their
+    queries (see :meth:`Tape.surface`; there is one, ``ndpack.meshes.kernels.add_interpreter_queries``).
 
-    One per dimension, set of plug-ins and ``surfaces`` (cached here, and its compiled code on
-    disk): its text holds the library, the surface queries, the plug-ins and the interpreter.
-    Surfaces are apart because their queries are most of the code: analytic shapes do not wait
-    for them to compile.
+    One per dimension, set of plug-ins and whether with surfaces (cached here, and its compiled
+    code on disk): its text holds the library, the surface queries, the plug-ins and the
+    interpreter. Surfaces are apart because their queries are most of the code: analytic shapes
+    do not wait for them to compile.
     """
-    key = (int(dim), tuple(_code_key(kernel) for kernel in users), bool(surfaces))
+    key = (int(dim), tuple(_code_key(kernel) for kernel in users), surfaces is not None)
     if key not in _interpreters:
-        _interpreters[key] = _interpreter(int(dim), users, bool(surfaces))
+        _interpreters[key] = _interpreter(int(dim), users, surfaces)
     return _interpreters[key]
 
 
-_interpreters: dict[tuple, Program] = {}  # (dim, plug-ins' code, surfaces) -> program
+_interpreters: dict[tuple, Program] = {}  # (dim, plug-ins' code, with surfaces) -> program
 
 
-def _interpreter(dim: int, users: tuple, surfaces: bool) -> Program:
-    from ..meshes import kernels as surface
-
-    title = f"{dim}-D shapes" + {2: " and outlines", 3: " and meshes"}.get(dim, "") * surfaces
+def _interpreter(dim: int, users: tuple, surfaces) -> Program:
+    title = f"{dim}-D shapes" + {2: " and outlines", 3: " and meshes"}.get(dim, "") * (surfaces is not None)
     names = ", ".join(kernel.name.removeprefix("user_") for kernel in users)
     program = Program(dim, title + (f", plug-ins {names}" if users else ""))
     cases = []
     for opcode, function in enumerate(LEAVES):
         if ONLY_IN.get(function, dim) == dim:
             cases.append((opcode, program.use(function)))
-    if surfaces:
-        cases.append((SURFACE, surface.add_queries(program)))
-        for function in (surface.surface_feature, surface.surface_distance_at, surface.surface_slope):
-            program.use(function)
+    if surfaces is not None:
+        cases.append((SURFACE, surfaces(program)))
     for number, kernel in enumerate(users):
         cases.append((USER + number, program.add_kernel(kernel.renamed(f"plugin{number}_{kernel.name}"))))
     branches = "".join(f"    if op == {opcode}:\n        return {name}(x, prm, o)\n" for opcode, name in cases)
     for source in (f"def tape_primitive(x, prm, op: int, o: int):\n{branches}    return 0.0\n",
-                   _TAPE_LEAF, _sd_source(REGISTERS), _GRADIENT if surfaces else NO_GRADIENT):
+                   _TAPE_LEAF, _sd_source(REGISTERS), NO_GRADIENT if surfaces is None else _GRADIENT):
         for text in source.split("\n\n\n"):
             kernel = Kernel(text.strip() + "\n", callees=program.kernels)
             program.kernels[kernel.name] = kernel

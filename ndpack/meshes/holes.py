@@ -37,14 +37,14 @@ class Caps:
         Each rim's size: the diagonal of its bounding box.
     """
 
-    centres: np.ndarray
+    centers: np.ndarray
     faces: np.ndarray
     sizes: np.ndarray
 
     @property
     def count(self) -> int:
         """Number of holes (rims)."""
-        return len(self.centres)
+        return len(self.centers)
 
 
 #: The caps of a closed mesh.
@@ -98,7 +98,7 @@ def cap(vertices: np.ndarray, faces: np.ndarray) -> Caps:
     ends = vertices[rim]  # (b, 2, 3)
     length = np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)
     weight = np.bincount(piece, length, minlength=len(pieces))
-    centres = np.stack([np.bincount(piece, length * ends[:, :, i].mean(axis=1), minlength=len(pieces))
+    centers = np.stack([np.bincount(piece, length * ends[:, :, i].mean(axis=1), minlength=len(pieces))
                         for i in range(3)], axis=1) / weight[:, None]
     lower = np.full((len(pieces), 3), np.inf)
     upper = np.full((len(pieces), 3), -np.inf)
@@ -106,4 +106,4 @@ def cap(vertices: np.ndarray, faces: np.ndarray) -> Caps:
     np.maximum.at(upper, piece, ends[:, 0])
     # The rim a -> b lacks its partner b -> a: the cap triangle (b, a, centre) supplies it.
     cap_faces = np.column_stack([rim[:, 1], rim[:, 0], len(vertices) + piece]).astype(np.int64)
-    return Caps(centres, cap_faces, np.linalg.norm(upper - lower, axis=1))
+    return Caps(centers, cap_faces, np.linalg.norm(upper - lower, axis=1))

@@ -54,6 +54,16 @@ def add_queries(program) -> str:
     return program.use(surface_distance)
 
 
+def add_interpreter_queries(program) -> str:
+    """Add what the tape interpreter (:mod:`ndpack.kernels.tape`) needs to evaluate a surface
+    leaf: the queries (:func:`add_queries`, whose distance's name it returns) and the gradient's
+    functions its entries call. The mesh and outline leaves hand it to the tape."""
+    name = add_queries(program)
+    for function in (surface_feature, surface_distance_at, surface_slope):
+        program.use(function)
+    return name
+
+
 def add_gradient(program, oracle, offset: int) -> None:
     """Give ``oracle`` (a surface at ``offset``, its queries added) the closed-form gradient:
     one tree walk finds the nearest element, which gives both the distance and its direction

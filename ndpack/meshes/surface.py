@@ -70,7 +70,7 @@ def read(path) -> "trimesh.Trimesh":  # noqa: F821
         # Unprocessed: trimesh's processing drops the triangles of a NaN vertex silently, which
         # would turn a broken file into a mesh with holes.
         loaded = trimesh.load(path, force="mesh", process=False)
-    except Exception as error:  # trimesh raises many kinds for unreadable files
+    except Exception as error:  # noqa: BLE001 - trimesh raises many kinds for unreadable files
         raise ShapeError(
             f"trimesh cannot read {path!r} as a triangle mesh ({type(error).__name__}: {error}); "
             "use STL, OBJ, PLY, OFF or GLB"
@@ -203,14 +203,14 @@ def prepare(vertices, faces, holes: str = "cap") -> Surface:
             f"{caps.sizes.max() * unit:.3g} across, for a mesh {size * unit:.3g} across); close it first, or pass "
             "holes='cap' (--holes cap) to close each hole with a fan of triangles")
     if caps.count:
-        corners = np.vstack([mesh.vertices, caps.centres])[caps.faces]
+        corners = np.vstack([mesh.vertices, caps.centers])[caps.faces]
         # Only caps with no area at all (a rim edge through its rim's centre) are left out: they
         # add nothing to the winding number and have no normal. Thin caps stay, or the surface
         # would not close.
         flat = ~np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]).any(axis=1)
-        mesh = trimesh.Trimesh(np.vstack([mesh.vertices, caps.centres]),
+        mesh = trimesh.Trimesh(np.vstack([mesh.vertices, caps.centers]),
                                np.vstack([mesh.faces, caps.faces[~flat]]), process=False)
-        kept = np.vstack([kept, caps.centres * unit + centre])
+        kept = np.vstack([kept, caps.centers * unit + centre])
         notes.append(
             f"capped {caps.count} {'hole' if caps.count == 1 else 'holes'} with {int((~flat).sum())} triangles "
             f"(fans to each rim's centre; the largest hole {caps.sizes.max() * unit:.3g} across)")

@@ -11,7 +11,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ShapeError
+from ..oracle import Oracle
 from .empty import Empty
+from .mesh import TriangleMesh
+from .polygon import Polygon
 
 
 def _module_of(obj) -> str:
@@ -28,8 +31,6 @@ def from_manifold(solid):
         manifold3d's status. An empty solid is an :class:`~ndpack.shapes.empty.Empty`.
     """
     import manifold3d
-
-    from .mesh import TriangleMesh
 
     status = solid.status()
     if status != manifold3d.Error.NoError:
@@ -48,8 +49,6 @@ def from_manifold(solid):
 
 def from_cross_section(section):
     """A :class:`~ndpack.Polygon` of a ``manifold3d.CrossSection`` (all its contours, holes too)."""
-    from .polygon import Polygon
-
     if section.is_empty():
         return Empty(2, "the manifold3d cross-section is empty (a difference or intersection removed everything)")
     return Polygon.from_rings([np.asarray(ring, dtype=np.float64) for ring in section.to_polygons()])
@@ -57,8 +56,6 @@ def from_cross_section(section):
 
 def from_shapely(geometry):
     """A :class:`~ndpack.Polygon` of a shapely ``Polygon`` or ``MultiPolygon``."""
-    from .polygon import Polygon
-
     if geometry.is_empty:  # an empty difference is a polygon, or a collection, of nothing
         return Empty(2, "the shapely polygon is empty")
     kind = geometry.geom_type
@@ -84,8 +81,6 @@ def as_oracle(obj):
     ``Polygon``/``MultiPolygon``; anything else is returned unchanged (and rejected later with a
     message that says what a shape is).
     """
-    from ..oracle import Oracle
-
     if isinstance(obj, Oracle):
         return obj
     module, name = _module_of(obj), type(obj).__name__
@@ -94,8 +89,6 @@ def as_oracle(obj):
     if module == "manifold3d" and name == "CrossSection":
         return from_cross_section(obj)
     if module == "trimesh" and name == "Trimesh":
-        from .mesh import TriangleMesh
-
         return TriangleMesh.from_trimesh(obj)
     if module == "shapely":
         return from_shapely(obj)

@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ShapeError
+from ..kernels import tape as ops
 from ..oracle import Oracle, as_vector, check_compatible
 from .empty import is_special
 
@@ -124,8 +125,6 @@ class _Boolean(_Node):
         return program.define(f"def _(p, prm):\n    return {self._combine}({calls})\n")
 
     def _tape(self, tape):
-        from ..kernels import tape as ops
-
         # Nested nodes of the same kind are one n-ary node (min and max are associative and
         # exact), so a chain a | b | c needs two values on the tape's stack, not one per level.
         operands = self._operands()
@@ -213,10 +212,8 @@ class Complement(_Node):
         return program.define(f"def _(p, prm):\n    return -{program.shape(self.child)}(p, prm)\n")
 
     def _tape(self, tape):
-        from ..kernels.tape import NEGATE
-
         tape.add(self.child)
-        tape.operation(NEGATE)
+        tape.operation(ops.NEGATE)
 
     def complement(self):
         return self.child
@@ -256,11 +253,9 @@ class Difference(_Node):
         return program.define(f"def _(p, prm):\n    return max({a}(p, prm), -{b}(p, prm))\n")
 
     def _tape(self, tape):
-        from ..kernels.tape import DIFFERENCE
-
         tape.add(self.a)
         tape.add(self.b)
-        tape.operation(DIFFERENCE)
+        tape.operation(ops.DIFFERENCE)
 
     def __repr__(self):
         return f"({self.a!r} - {self.b!r})"
@@ -467,10 +462,8 @@ class Offset(_Node):
         return program.define(f"def _(p, prm):\n    return {child}(p, prm) - prm[{o}]\n")
 
     def _tape(self, tape):
-        from ..kernels.tape import OFFSET
-
         tape.add(self.child)
-        tape.operation(OFFSET, self.amount)
+        tape.operation(ops.OFFSET, self.amount)
 
     def __repr__(self):
         return f"{self.child!r}.offset({self.amount})"
@@ -506,10 +499,8 @@ class Shell(_Node):
         return program.define(f"def _(p, prm):\n    return abs({child}(p, prm)) - prm[{o}]\n")
 
     def _tape(self, tape):
-        from ..kernels.tape import SHELL
-
         tape.add(self.child)
-        tape.operation(SHELL, self.thickness / 2)
+        tape.operation(ops.SHELL, self.thickness / 2)
 
     def __repr__(self):
         return f"{self.child!r}.shell({self.thickness})"
@@ -572,11 +563,9 @@ class SmoothUnion(_Node):
         )
 
     def _tape(self, tape):
-        from ..kernels.tape import SMOOTH
-
         tape.add(self.a)
         tape.add(self.b)
-        tape.operation(SMOOTH, self.blend)
+        tape.operation(ops.SMOOTH, self.blend)
 
     def __repr__(self):
         return f"{self.a!r}.smooth_union({self.b!r}, {self.blend})"

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ShapeError
-from ..oracle import Oracle, check_compatible
+from ..oracle import Oracle, _parts
 
 
 class _Special(Oracle):
@@ -139,9 +139,5 @@ def is_special(shape) -> bool:
 
 def _dimension(shape, others):
     """The others as shapes (other libraries' converted), checked to share ``shape``'s dimension."""
-    from .adapters import as_oracle
-
-    others = [as_oracle(other) for other in others]
-    check_compatible(shape, *others)
-    return others
+    return _parts(shape, others)[1:]
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import MeshWarning, ShapeError
 from ..meshes import kernels, layout, queries, solid_angles, surface
-from ..oracle import Oracle, as_points, unit_rows
+from ..oracle import Oracle, as_points, tree, unit_rows
 
 #: Points sampled to compare the two sign methods on a closed mesh: where they disagree away from
 #: the surface, the surface crosses itself and only the winding number is right.
@@ -245,7 +245,9 @@ class TriangleMesh(Oracle):
         return program.define(f"def _(p, prm):\n    return {distance}(p, prm, {offset})\n")
 
     def _tape(self, tape):
-        tape.surface(self._block, self._warp_mesh_id)
+        offset = tape.params(layout.relocate(self._block, tape.next_offset))
+        tape.add_device_values(offset + kernels.MESH_ID, 4, self._warp_mesh_id)
+        tape.surface(offset, kernels.add_interpreter_queries)
 
     def _warp_mesh_id(self, device) -> np.ndarray:
         """The 16-bit pieces of the id of this mesh's ``wp.Mesh`` on ``device`` (built once, kept)."""
@@ -263,8 +265,6 @@ class TriangleMesh(Oracle):
 def mesh_notes(shape) -> list[str]:
     """What was made of the meshes in ``shape``'s tree before use: capped holes, welded vertices,
     the winding number deciding inside (each mesh's :attr:`TriangleMesh.notes`, named)."""
-    from .plugin import tree
-
     notes = []
     for node in tree(shape):
         if isinstance(node, TriangleMesh):
@@ -279,7 +279,5 @@ def recorded_holes(shape) -> str | None:
     tree had its holes capped or was loaded with ``holes="cap"``, else ``"refuse"`` where one was
     loaded so, else None (no mesh, or no choice made). Capping leaves a closed mesh as it is, so
     one answer holds for a tree of several meshes."""
-    from .plugin import tree
-
     options = {getattr(node, "hole_option", None) for node in tree(shape) if isinstance(node, TriangleMesh)}
     return "cap" if "cap" in options else "refuse" if "refuse" in options else None

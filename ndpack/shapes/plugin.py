@@ -16,7 +16,7 @@ import operator
 import numpy as np
 
 from ..errors import BoundsError, DimensionError, OracleError, ParameterError
-from ..oracle import Oracle, check_finite, unit_rows
+from ..oracle import Oracle, check_finite, tree, unit_rows
 
 #: Where the points of each ray of :func:`steepest_on_rays` lie, as fractions of its length
 #: after its start: evenly (a steep region covering about 1/16 of the ray is met), and closer and
@@ -83,6 +83,7 @@ class Function(Oracle):
     """
 
     convex = False
+    numpy_only = True  # a NumPy function: no compiled backend runs it (ScalarFunction's do)
 
     def __init__(
         self, fn, dim, bounds, exact_inside=False, exact_outside=False, gradient=None, name=None
@@ -277,16 +278,6 @@ def check_plugin_slopes(shape) -> None:
         if isinstance(node, Function) and not getattr(node, "_slope_checked", False):
             node.check_lipschitz()
             node._slope_checked = True
-
-
-def tree(shape):
-    """``shape`` and every shape below it (CSG nodes keep theirs in ``children``, ``child`` or ``a``/``b``)."""
-    yield shape
-    below = list(getattr(shape, "children", ()))
-    below += [getattr(shape, name) for name in ("child", "a", "b") if hasattr(shape, name)]
-    for part in below:
-        if isinstance(part, Oracle):  # Capsule's a and b are points, not shapes
-            yield from tree(part)
 
 
 def steepest_on_rays(distance, starts, directions, lengths, bounds=None, shortest=0.0):

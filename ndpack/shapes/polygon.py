@@ -327,7 +327,8 @@ class Polygon(Oracle):
         return block
 
     def _tape(self, tape):
-        tape.surface(self._outline())
+        offset = tape.params(layout.relocate(self._outline(), tape.next_offset))
+        tape.surface(offset, kernels.add_interpreter_queries)
 
     def _kernel(self, program):
         offset = program.add_params(layout.relocate(self._outline(), program.next_offset))

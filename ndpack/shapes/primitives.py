@@ -40,7 +40,7 @@ from ..errors import DimensionError, ShapeError
 from ..kernels import library
 from ..oracle import Oracle, as_vector, ball_volume, unit_rows
 
-__all__ = [  # noqa: RUF022 - in the order of the module docstring
+__all__ = [  # in the order of the module docstring
     "Ball",
     "Box",
     "RoundedBox",

@@ -24,7 +24,9 @@ import ast
 
 import numpy as np
 
-from ..errors import KernelError, OracleError
+from ..errors import BoundsError, KernelError, OracleError
+from ..kernels.compile import numba_evaluator
+from ..kernels.compiled import compiled_program
 from ..kernels.language import Kernel, constant_int, located_error, parse_function
 from .plugin import Function
 
@@ -118,6 +120,8 @@ class ScalarFunction(Function):
     one CSG tree; each reads its own parameters.
     """
 
+    numpy_only = False
+
     def __init__(self, fn, dim, bounds, params=(), exact_inside=False, exact_outside=False, name=None):
         if not callable(fn):
             raise TypeError(f"fn must be a function (p, params) -> float, got {type(fn).__name__}")
@@ -141,9 +145,6 @@ class ScalarFunction(Function):
 
     def _evaluate(self, points):
         """(n,) distances at (n, dim) points, by the Numba CPU form of the kernel."""
-        from ..backends.base import compiled_program
-        from ..kernels.compile import numba_evaluator
-
         flat = compiled_program(self)
         evaluate = self.__dict__.get("_evaluator")
         if evaluate is None:
@@ -174,8 +175,6 @@ def scalar_plugin(dim, bounds=None, params=(), **flags):
     if callable(dim):
         raise TypeError("scalar_plugin needs its arguments: @ndpack.scalar_plugin(dim=..., bounds=...)")
     if bounds is None:
-        from ..errors import BoundsError
-
         raise BoundsError(f"scalar_plugin needs bounds: a (2, {dim}) box [lower corner, upper corner]")
 
     def wrap(fn) -> ScalarFunction:

@@ -376,7 +376,7 @@ def _compiled_gradient(shape, points, hint=None, bound=None):
     the search given ``hint`` and ``bound`` (k,) (default: none, -1 and 1e30)."""
     import numba
 
-    from ndpack.backends.base import compiled_program
+    from ndpack.kernels.compiled import compiled_program
     from ndpack.kernels.compile import numba_namespace
 
     def jit(namespace, names):

@@ -59,7 +59,7 @@ def test_invalid_and_empty_manifolds_say_what_is_wrong():
         nd.pack(manifold3d.Manifold(mesh), n=5)
     empty = manifold3d.Manifold.cube([1.0, 1.0, 1.0]) - manifold3d.Manifold.cube([2.0, 2.0, 2.0]).translate([-0.5, -0.5, -0.5])
     box = nd.Box([0, 0, 0], [1, 1, 1])
-    assert box - empty is box  # an empty part of a tree is left out (tests/test_empty.py)
+    assert box - empty is box  # an empty part of a tree is left out (tests/shapes/test_empty.py)
     with pytest.raises(ShapeError, match="nothing to pack: the manifold3d solid is empty"):
         nd.pack(empty, n=5)
 
@@ -116,7 +116,7 @@ def test_manifold_part_example_packs_at_small_size():
     import importlib.util
     from pathlib import Path
 
-    path = Path(__file__).parent.parent / "examples" / "manifold_part.py"
+    path = Path(__file__).resolve().parents[2] / "examples" / "manifold_part.py"
     spec = importlib.util.spec_from_file_location("manifold_part", path)
     example = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(example)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import ndpack as nd
-from ndpack.backends.numba_backend import KERNELS
+from ndpack.backends.numba_common import KERNELS
 from ndpack.backends.restarts import Restarts, run_key, stream, units
 
 

@@ -1,7 +1,7 @@
 """Where a shape comes from, as the command line names it: one string, four kinds.
 
 =============================== ===========================================================
-``box:dim=4``, ``demo``         a named shape (:mod:`ndpack.builtin`, or a package's entry point)
+``box:dim=4``, ``demo``         a named shape (:mod:`ndpack.named_shapes`, or a package's entry point)
 ``part.stl``, ``cow.obj``       a triangle mesh file (anything trimesh reads)
 ``part.py``                     a Python script that sets ``shape`` (an ndpack shape, or a
                                 manifold3d, trimesh or shapely object), or defines ``shape()``
@@ -24,7 +24,11 @@ import runpy
 import sys
 from pathlib import Path
 
+from .named_shapes import BUILTIN, from_spec, registered
 from .errors import ShapeError
+from .oracle import Oracle
+from .shapes.adapters import as_oracle
+from .shapes.mesh import TriangleMesh
 
 #: Suffixes read as triangle meshes (trimesh reads these and more).
 MESH_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".3mf", ".dae")
@@ -47,9 +51,6 @@ def load_shape(source: str, holes: str | None = None, sign: str | None = None):
     -------
     Oracle
     """
-    from .builtin import from_spec
-    from .shapes.adapters import as_oracle
-
     text = source.strip()
     if not text:
         raise ShapeError("the shape is empty: name a built-in shape (e.g. box:dim=3), a mesh file or a script")
@@ -64,12 +65,10 @@ def load_shape(source: str, holes: str | None = None, sign: str | None = None):
     if path.is_dir():
         raise ShapeError(f"{text} is a folder, not a mesh file or a script")
     if kind in ("script", "mesh") and not path.exists():
-        raise ShapeError(f"no such file: {text}")
+        raise ShapeError(f"no such file: {text}" + _sample_hint(path))
     if kind == "script":
         return _checked(as_oracle(_from_script(path)), text)
     if kind == "mesh":
-        from .shapes.mesh import TriangleMesh
-
         return TriangleMesh.load(path, sign=sign or "auto", holes=holes)
     if kind == "spec":
         return from_spec(text)
@@ -80,8 +79,6 @@ def load_shape(source: str, holes: str | None = None, sign: str | None = None):
 def _kind(text: str) -> str:
     """How :func:`load_shape` reads a stripped source: ``"script"``, ``"mesh"`` (any other
     file), ``"spec"`` (a named shape) or ``"plugin"`` (``module:attribute``)."""
-    from .builtin import registered
-
     path = Path(text).expanduser()
     if path.suffix.lower() == ".py":
         return "script"
@@ -134,8 +131,6 @@ def _from_plugin(module_name: str, attribute: str):
 
 def _called(value, label: str):
     """A function is called with no arguments; anything else is the shape itself."""
-    from .oracle import Oracle
-
     if callable(value) and not isinstance(value, Oracle) and isinstance(value, type(_called)):
         try:
             return value()
@@ -145,8 +140,6 @@ def _called(value, label: str):
 
 
 def _checked(shape, source: str):
-    from .oracle import Oracle
-
     if not isinstance(shape, Oracle):
         raise ShapeError(
             f"{source} gave a {type(shape).__name__}, not a shape: return an ndpack shape, or a manifold3d, "
@@ -165,8 +158,6 @@ def code_in(source: str) -> str | None:
     """What code :func:`load_shape` would run for ``source``, in words, or None where it only
     reads data (a mesh file, a built-in shape spec): the same reading (:func:`_kind`), without
     touching the file system beyond ``is_file``."""
-    from .builtin import BUILTIN
-
     text = source.strip()
     kind = _kind(text)
     name = text.partition(":")[0].strip()
@@ -185,3 +176,12 @@ def describe(source: str) -> str:
     if path.is_file():
         return str(path.resolve())
     return source.strip()
+
+
+def _sample_hint(path: Path) -> str:
+    """For a missing file named like a sample mesh (``cow.obj``): how to get it."""
+    from .samples import SAMPLES
+
+    if path.stem in SAMPLES:
+        return f" (the docs' sample meshes: `ndpack samples` writes {path.stem}.obj and the others here)"
+    return ""

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import ShapeError
+from .oracle import Oracle
 from .shapes import Ball, Box, Cylinder, Polygon, RoundedBox, Simplex, Torus
 
 
@@ -125,8 +126,6 @@ def from_spec(spec: str):
         shape = factory(**keywords)
     except TypeError as error:
         raise ShapeError(f"shape {name!r} refused {', '.join(keywords)}: {error}") from None
-    from .oracle import Oracle
-
     if not isinstance(shape, Oracle):
         raise ShapeError(f"shape {name!r} came back as {type(shape).__name__}, not an ndpack shape")
     return shape

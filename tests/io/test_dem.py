@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import ndpack as nd
-from ndpack import dem_formats, formats
+from ndpack import io as ndio
 from ndpack.errors import DimensionError, NdpackError
 
 
@@ -194,7 +194,7 @@ def test_read_a_hand_written_lammps_file(tmp_path):
     assert loaded.dim == 3
     np.testing.assert_array_equal(loaded.centers, [[1, 2, 3], [4, 5, 6], [7, 7, 7]])  # in atom-ID order
     np.testing.assert_array_equal(loaded.radii, [0.5, 1, 0.75])
-    centers, radii, info = dem_formats.read_data(path)
+    centers, radii, info = ndio.read_data(path)
     np.testing.assert_array_equal(info["ids"], [1, 2, 3])
     np.testing.assert_array_equal(info["density"], [2500, 2600, 2500])
     np.testing.assert_array_equal(info["box"], [[0, 0, -1], [10, 10, 10]])
@@ -211,7 +211,7 @@ def test_read_a_hand_written_yade_file(tmp_path):
     np.testing.assert_array_equal(loaded.centers, [[0, 0, 0], [2.5, 0, 0], [-1e-3, 100, 3]])
     np.testing.assert_array_equal(loaded.radii, [1, 1.5, 0.25])
     path.write_text("#format id_x_y_z_r_matId\n4 1 2 3 0.5 1\n")  # Yade's other layout
-    centers, radii = dem_formats.read_yade(path)
+    centers, radii = ndio.read_yade(path)
     np.testing.assert_array_equal(centers, [[1, 2, 3]])
     np.testing.assert_array_equal(radii, [0.5])
     path.write_text("1 2 3 0.5\n")  # no header: x_y_z_r, as in Yade
@@ -229,7 +229,7 @@ def test_dimensions_a_format_cannot_hold_are_refused(tmp_path):
     with pytest.raises(DimensionError, match=r"yade format \(\.txt\) holds 3-D spheres, not a 2-D packing"):
         spheres_only(np.zeros((1, 2)), [0.5]).save(tmp_path / "disk.txt")
     with pytest.raises(DimensionError, match="not a 4-D packing"):
-        formats.check(tmp_path / "t.data", None, 4)
+        ndio.check(tmp_path / "t.data", None, 4)
     assert not list(tmp_path.iterdir())
 
 
@@ -281,9 +281,9 @@ def test_bad_yade_files_get_clear_errors(tmp_path):
 
 # ---------------------------------------------------------------------------------- the table, the CLI
 def test_the_formats_are_in_the_table():
-    assert {"lammps", "liggghts", "yade"} <= set(formats.names())
-    assert formats.SUFFIXES[".data"] == "lammps" and formats.SUFFIXES[".txt"] == "yade"
-    assert "density=1.0" in formats.table()
+    assert {"lammps", "liggghts", "yade"} <= set(ndio.names())
+    assert ndio.SUFFIXES[".data"] == "lammps" and ndio.SUFFIXES[".txt"] == "yade"
+    assert "density=1.0" in ndio.table()
 
 
 def run(*args, cwd=None):

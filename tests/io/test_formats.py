@@ -12,7 +12,8 @@ import pytest
 import trimesh
 
 import ndpack as nd
-from ndpack import formats
+from ndpack import io as ndio
+from ndpack.ball_union import enclosing_sphere
 
 
 @pytest.fixture(scope="module")
@@ -123,7 +124,7 @@ def test_vtp_reads_a_header_encoded_apart_from_the_data(cube, tmp_path):
 # ---------------------------------------------------------------------------------- sphere meshes
 @pytest.mark.parametrize("subdivisions", [0, 1, 2])
 def test_sphere_mesh_has_its_triangles_on_its_spheres(cube, subdivisions):
-    mesh = formats.sphere_mesh(cube.centers, cube.radii, subdivisions)
+    mesh = ndio.sphere_mesh(cube.centers, cube.radii, subdivisions)
     per_vertex = 10 * 4**subdivisions + 2
     assert len(mesh.faces) == 40 * 20 * 4**subdivisions and len(mesh.vertices) == 40 * per_vertex
     owner = np.repeat(np.arange(40), per_vertex)
@@ -153,9 +154,9 @@ def test_sphere_mesh_files_give_back_the_spheres(cube, tmp_path, suffix, options
 def test_spheres_that_share_a_vertex_are_still_told_apart():
     # Two unit spheres touching at (1, 0, 0), a vertex of both icospheres.
     centers, radii = np.array([[0.0, 0, 0], [2.0, 0, 0]]), np.array([1.0, 1.0])
-    mesh = formats.sphere_mesh(centers, radii)
+    mesh = ndio.sphere_mesh(centers, radii)
     assert len(trimesh.Trimesh(mesh.vertices, mesh.faces).vertices) == 2 * 42 - 1  # merged: one shared
-    found_centers, found_radii = formats.spheres_from_mesh(mesh.vertices, mesh.faces)
+    found_centers, found_radii = ndio.spheres_from_mesh(mesh.vertices, mesh.faces)
     np.testing.assert_allclose(found_centers, centers, atol=1e-15)
     np.testing.assert_allclose(found_radii, radii, rtol=1e-15)
 
@@ -171,7 +172,7 @@ def test_sph_is_a_two_level_tree_with_a_bounding_root(cube, tmp_path):
     assert reach.max() <= root[3] * (1 + 1e-15)
     loaded = nd.Packing.load(path)
     assert_same_spheres(loaded, cube, rounds=False)
-    centers, radii = formats.read_sph(path, level=0)
+    centers, radii = ndio.read_sph(path, level=0)
     np.testing.assert_array_equal(centers[0], root[:3])
 
 
@@ -193,10 +194,10 @@ Options :
 """
     path = tmp_path / "toolkit.sph"
     path.write_text(text)
-    centers, radii = formats.read_sph(path)
+    centers, radii = ndio.read_sph(path)
     np.testing.assert_array_equal(radii, [0.5, 0.5, 0.9])
     np.testing.assert_array_equal(centers[:, 0], [-1.5, -0.5, 1.0])
-    assert len(formats.read_sph(path, level=1)[1]) == 2
+    assert len(ndio.read_sph(path, level=1)[1]) == 2
     assert len(nd.Packing.load(path)) == 3
 
 
@@ -247,12 +248,12 @@ robot_cfg:
     np.testing.assert_array_equal(loaded.radii, [0.03, 1.5e-3])
     # Tiny and huge numbers are written so that YAML 1.1 (PyYAML) reads them as the same floats.
     tiny = nd.Packing(np.array([[1e-05, -2e-20, 1e16]]), np.array([1e-07]), np.zeros(1, np.int64), 1.0)
-    path = formats.save(tiny, tmp_path / "tiny.yml")
+    path = ndio.save(tiny, tmp_path / "tiny.yml")
     assert "1.0e-05" in path.read_text()
     sphere = yaml.safe_load(path.read_text())["collision_spheres"]["body"][0]
     assert sphere == {"center": [1e-05, -2e-20, 1e16], "radius": 1e-07}
     # Link names that YAML would read as something else are quoted.
-    text = formats.curobo_yaml({"yes": (np.zeros((1, 3)), [1.0]), "1": (np.zeros((0, 3)), []),
+    text = ndio.curobo_yaml({"yes": (np.zeros((1, 3)), [1.0]), "1": (np.zeros((0, 3)), []),
                                 "a b": ([[0, 0, 0]], [2])})
     assert list(yaml.safe_load(text)["collision_spheres"]) == ["yes", "1", "a b"]
     with pytest.raises(nd.NdpackError, match="not a readable ndpack packing.*no 'collision_spheres'"):
@@ -266,7 +267,7 @@ def test_medial_axis_sample(request, tmp_path, name, suffixes):
     packing = request.getfixturevalue(name)
     for suffix in suffixes:
         path = packing.save(tmp_path / f"medial{suffix}", format="medial")
-        points, radii = formats.load_medial(path)
+        points, radii = ndio.load_medial(path)
         np.testing.assert_array_equal(points, packing.medial_axis)
         np.testing.assert_array_equal(radii, packing.medial_radii)
     if ".csv" in suffixes:
@@ -281,15 +282,26 @@ def test_medial_and_packing_files_are_not_mixed_up(cube, tmp_path):
     with pytest.raises(nd.NdpackError, match="load_medial"):
         nd.Packing.load(medial, format="medial")
     with pytest.raises(nd.NdpackError, match="holds a packing"):
-        formats.load_medial(cube.save(tmp_path / "spheres.ply"))
+        ndio.load_medial(cube.save(tmp_path / "spheres.ply"))
 
 
 # ---------------------------------------------------------------------------------- errors
 def test_format_table():
-    assert formats.names() == ["npz", "csv", "json", "ply", "vtp", "mesh", "sph", "curobo", "lammps", "liggghts",
-                               "yade", "medial"]
-    text = formats.table()
-    assert all(name in text for name in formats.names()) and ".glb" in text and "subdivisions=1" in text
+    assert ndio.names() == ["npz", "csv", "json", "ply", "vtp", "mesh", "sph", "curobo", "lammps", "liggghts",
+                            "yade", "medial"]
+    text = ndio.table()
+    assert all(name in text for name in ndio.names()) and ".glb" in text and "subdivisions=1" in text
+
+
+def test_the_registry_keeps_one_format_per_name_and_suffix():
+    from ndpack.io.registry import Format, register
+
+    ply = ndio.FORMATS["ply"]
+    with pytest.raises(ValueError, match="'ply' is already registered"):
+        register(ply)
+    with pytest.raises(ValueError, match=r"cannot be the default for \.ply"):
+        register(Format("other", (".ply",), "3", "-", {}, ply.write, ply.read), default_for=(".ply",))
+    assert "other" not in ndio.FORMATS and ndio.SUFFIXES[".ply"] == "ply"
 
 
 def test_unknown_suffix_name_and_option(cube, tmp_path):
@@ -357,18 +369,18 @@ def test_unwritable_path(cube, tmp_path):
 
 def test_enclosing_sphere_encloses_and_is_nearly_smallest():
     # Two spheres: the smallest enclosing one spans both, radius (1 + 4 + 0.5) / 2.
-    center, radius = formats.enclosing_sphere([[0, 0, 0], [4, 0, 0]], [1.0, 0.5])
+    center, radius = enclosing_sphere([[0, 0, 0], [4, 0, 0]], [1.0, 0.5])
     assert radius == pytest.approx(2.75, rel=2e-3) and center[0] == pytest.approx(1.75, abs=0.01)
     # Points all over a unit sphere, off the origin: the smallest is that sphere.
     rng = np.random.default_rng(0)
     directions = rng.standard_normal((4000, 3))
     points = directions / np.linalg.norm(directions, axis=1)[:, None] + [3.0, -1.0, 2.0]
-    center, radius = formats.enclosing_sphere(points, np.zeros(len(points)))
+    center, radius = enclosing_sphere(points, np.zeros(len(points)))
     assert 0.999 < radius < 1.002
     # A lopsided cluster: every sphere inside, and no larger than the box's middle gives.
     centers = np.vstack([rng.random((500, 3)) * 0.1, [[1, 1, 1], [1, 0, 0]]])
     radii = rng.uniform(0.001, 0.02, len(centers))
-    center, radius = formats.enclosing_sphere(centers, radii)
+    center, radius = enclosing_sphere(centers, radii)
     assert np.all(np.linalg.norm(centers - center, axis=1) + radii <= radius * (1 + 1e-12))
     middle = ((centers - radii[:, None]).min(axis=0) + (centers + radii[:, None]).max(axis=0)) / 2
     assert radius <= (np.linalg.norm(centers - middle, axis=1) + radii).max()
@@ -385,19 +397,19 @@ def part():
     return nd.pack(nd.Box([0, 0, 0], [1, 2, 0.5]) - nd.Ball([1, 2, 0.5], 0.4), 300, mode="fast", seed=0)
 
 
-WRITTEN = [(name, suffix) for name, fmt in formats.FORMATS.items() if fmt.read is not None for suffix in fmt.suffixes]
+WRITTEN = [(name, suffix) for name, fmt in ndio.FORMATS.items() if fmt.read is not None for suffix in fmt.suffixes]
 
 
 @pytest.mark.parametrize("name, suffix", WRITTEN)
 def test_every_file_ndpack_writes_verifies(part, square, tmp_path, capsys, name, suffix):
     from ndpack.cli import main
 
-    fmt = formats.FORMATS[name]
+    fmt = ndio.FORMATS[name]
     for packing, source in ((part, PART), (square, OUTLINE)):
-        if packing.dim not in formats._dims(fmt, suffix):
+        if packing.dim not in fmt.dim_range(suffix):
             continue
         script = tmp_path / f"shape{packing.dim}.py"
         script.write_text(source)
-        path = formats.save(packing, tmp_path / f"spheres{packing.dim}{suffix}", format=name)
+        path = ndio.save(packing, tmp_path / f"spheres{packing.dim}{suffix}", format=name)
         assert main(["verify", str(path), "--shape", str(script)]) == 0, capsys.readouterr().out
         assert "valid" in capsys.readouterr().out

@@ -1,4 +1,4 @@
-"""Sphere files that discrete-element (DEM) codes read directly: LAMMPS, LIGGGHTS and Yade.
+"""Sphere files that discrete-element (DEM) codes read directly: LAMMPS, LIGGGHTS and Yade (2-3-D).
 
 LAMMPS data file (``lammps``, ``.data``)
     Read by LAMMPS's ``read_data`` with ``atom_style sphere``. A header (the first line is a
@@ -28,8 +28,10 @@ Yade text file (``yade``, ``.txt``)
 Numbers are written with 17 significant digits (``%.17g``), so every centre and radius reads
 back to the same float64 (a diameter ``2 r`` is exact in binary floating point).
 
-This module depends on NumPy and :mod:`ndpack.errors` only: :mod:`ndpack.formats` registers
-these formats and wraps them for packings.
+The array functions (:func:`data_box`, :func:`write_data`, :func:`read_data`, :func:`write_yade`,
+:func:`read_yade`) take and return NumPy arrays; the formats registered here wrap them for
+packings, with the box from the packing's recorded bounds and periods, else its shape's bounds,
+else the spheres' extent.
 """
 
 from __future__ import annotations
@@ -40,7 +42,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import DimensionError, NdpackError
+from ..errors import DimensionError, NdpackError
+from ..packing import Packing
+from .metadata import packing_from
+from .registry import Format, register, require_dim
 
 #: The columns of an ``atom_style sphere`` row.
 SPHERE_COLUMNS = ("atom-ID", "atom-type", "diameter", "density", "x", "y", "z")
@@ -431,3 +436,64 @@ def _check_style(style: str | None, rows: list) -> None:
         if style is None and len(words) not in (7, 10):
             raise ValueError(f"its Atoms section names no atom style and its line {number} has {len(words)} values, "
                              "not 7 (atom_style sphere) or 10 (with image flags)")
+
+
+# ---------------------------------------------------------------------------------- the formats
+def _dem_box(packing: Packing) -> tuple[np.ndarray, np.ndarray, str]:
+    """The data file's box ``(2, 3)``, its periodic axes ``(3,)`` and a comment on where the box came from.
+
+    ``params["bounds"]`` and ``params["period"]`` (a periodic domain's cell and per-axis periods)
+    where the packing records them; else the shape's bounds; else the spheres' extent.
+    """
+    bounds, periods = packing.params.get("bounds"), packing.params.get("period")
+    where = "the packing's recorded bounds"
+    if bounds is None and packing.shape is not None:
+        bounds = np.asarray(packing.shape.bounds, dtype=np.float64)
+        where = "the shape's bounds"
+        if bounds.shape != (2, packing.dim) or not np.isfinite(bounds).all():
+            bounds = None
+    if bounds is None:
+        where = "the spheres' extent (centre -+ radius)"
+    box, periodic = data_box(packing.centers, packing.radii, bounds, periods)
+    return box, periodic, f"box: {where}"
+
+
+def _write_packing_data(packing: Packing, path: Path, program: str, density) -> None:
+    require_dim(packing.dim, range(2, 4), f"a {program} data file")
+    density = density_value(density)
+    box, periodic, note = _dem_box(packing)
+    write_data(path, packing.centers, packing.radii, box, periodic, density, program, [note])
+
+
+def _write_lammps(packing: Packing, path: Path, density=1.0) -> None:
+    """A LAMMPS data file for ``atom_style sphere`` (see :func:`write_data`)."""
+    _write_packing_data(packing, path, "LAMMPS", density)
+
+
+def _write_liggghts(packing: Packing, path: Path, density=1.0) -> None:
+    """The same rows for LIGGGHTS's ``read_data`` (see :func:`write_data`)."""
+    _write_packing_data(packing, path, "LIGGGHTS", density)
+
+
+def _read_lammps(path: Path) -> Packing:
+    centers, radii, _ = read_data(path)
+    return packing_from({"dim": centers.shape[1]}, centers, radii)
+
+
+def _write_packing_yade(packing: Packing, path: Path) -> None:
+    require_dim(packing.dim, range(3, 4), "Yade's text format (.txt)")
+    write_yade(path, packing.centers, packing.radii)
+
+
+def _read_packing_yade(path: Path) -> Packing:
+    centers, radii = read_yade(path)
+    return packing_from(None, centers, radii)
+
+
+# Named with format=, lammps and liggghts take any file name (LAMMPS users often write data.bed).
+register(Format("lammps", (".data",), "2-3", "spheres, density, box (LAMMPS read_data, atom_style sphere)",
+                {"density": "1.0"}, _write_lammps, _read_lammps, any_name=True), default_for=(".data",))
+register(Format("liggghts", (".data",), "2-3", "the lammps rows, for LIGGGHTS read_data", {"density": "1.0"},
+                _write_liggghts, _read_lammps, any_name=True))
+register(Format("yade", (".txt",), "3", "spheres, as x y z r lines (Yade ymport.text)", {}, _write_packing_yade,
+                _read_packing_yade), default_for=(".txt",))

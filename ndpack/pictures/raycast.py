@@ -1,18 +1,17 @@
-"""Shaded pictures of 3-D packings without a display, and one entry point for every picture.
+"""Shaded pictures of 3-D packings without a display: a ray-caster in Numba.
 
 :func:`render` ray-casts the spheres with Numba on every core: an orthographic camera looks at
-the packing from ``view`` (azimuth and elevation in degrees); the spheres are binned into square
-tiles of the screen by their projected discs, nearest first, so that a pixel tests only its
-tile's spheres and stops at the first one whose front lies behind the nearest hit so far: hidden
-spheres cost little. Each pixel averages ``supersample**2`` rays (anti-aliasing) shaded with
-ambient + Lambert + a little Blinn-Phong specular light from the upper left, coloured by radius.
+the packing from ``view`` (azimuth and elevation in degrees, about the axis that stands up:
+:func:`ndpack.pictures.view.choose_up`); the spheres are binned into square tiles of the screen
+by their projected discs, nearest first, so that a pixel tests only its tile's spheres and stops
+at the first one whose front lies behind the nearest hit so far: hidden spheres cost little.
+Each pixel averages ``supersample**2`` rays (anti-aliasing) shaded with ambient + Lambert + a
+little Blinn-Phong specular light from the upper left, coloured by radius.
 
-A 2-D packing is drawn as circles (:func:`ndpack.plot.plot`); a packing in more than three
-dimensions as the 3-D slice through ``at`` along three ``axes``: a d-ball of radius ``r`` whose
-centre lies at distance ``h`` from the 3-flat meets it in a 3-ball of radius ``sqrt(r**2 - h**2)``.
-
-:func:`picture` picks the right picture for a packing and a file name (``.png``, ``.svg``,
-``.pdf``). Matplotlib and Numba are imported only when a picture is made.
+A 2-D packing is drawn as circles (:func:`ndpack.pictures.plot`); a packing in more than three
+dimensions as the 3-D slice through ``at`` along three ``axes``
+(:func:`ndpack.pictures.slices.slice_balls`). Numba and Matplotlib are imported only when a
+picture is made.
 """
 
 from __future__ import annotations
@@ -23,12 +22,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import DimensionError, ParameterError
+from ..errors import DimensionError, ParameterError
+from .colours import radius_colours, rgb
+from .slices import slice_balls
+from .plots import plot
+from .view import choose_up, screen_frame
 
-#: File types :func:`picture` writes: circles and plots go to all three, shaded renders to PNG.
-SUFFIXES = (".png", ".svg", ".pdf")
+#: File types a shaded render is written to.
 RENDER_SUFFIXES = (".png",)
-KINDS = ("auto", "render", "slice", "fill")
 
 #: Tile side in output pixels: small enough that a tile's list is short, large enough that few
 #: spheres fall into many tiles.
@@ -52,18 +53,13 @@ OUTLINE_MIN_RADIUS = 2.0
 OCCLUSION = 0.6
 OCCLUSION_RADIUS = 0.025
 OCCLUSION_SAMPLES = 24
-#: Radii spanning more than this ratio are coloured on a log scale.
-LOG_SPAN = 10.0
-#: The part of the colormap a shaded render uses: the darkest end of most maps (viridis' near
-#: black) would leave small spheres without visible shading.
-COLOUR_RANGE = (0.12, 1.0)
 
 prange = range  # replaced by numba.prange when the kernels are compiled (numba is imported late)
 
 
 # ---------------------------------------------------------------------------------------------- 3-D
 def render(packing, path=None, size=(900, 900), view=(35.0, 25.0), cmap="viridis", background="white",
-           clip=None, axes=(0, 1, 2), at=None, supersample=3, outline=True, occlusion=True):
+           clip=None, axes=None, at=None, supersample=3, outline=True, occlusion=True, up="auto"):
     """A shaded picture of the packing as an image; also written to ``path`` (PNG) when given.
 
     Parameters
@@ -71,13 +67,14 @@ def render(packing, path=None, size=(900, 900), view=(35.0, 25.0), cmap="viridis
     packing : Packing
         Any dimension >= 2: 2-D packings are drawn as circles, packings in more than three
         dimensions as the 3-D slice through ``at`` along ``axes``.
-    path : str or Path, optional
-        Where to write the PNG.
+    path : str or Path
+        Where to write the PNG (its text records the up axis and the view).
     size : (int, int)
         Width and height in pixels.
     view : (float, float)
-        Azimuth (degrees, about the third axis from the first) and elevation (degrees above the
-        plane of the first two axes) of the direction the camera looks from.
+        Azimuth (degrees about the up axis, from the axis after it: x after z, z after y, y
+        after x) and elevation (degrees above the plane across the up axis) of the direction
+        the camera looks from.
     cmap : str or Colormap
         Colours by sphere radius (log scale when the radii span more than 10x).
     background : colour
@@ -85,10 +82,10 @@ def render(packing, path=None, size=(900, 900), view=(35.0, 25.0), cmap="viridis
     clip : (point, normal), optional
         A half-space cut, both ``(d,)`` in the packing's coordinates: spheres whose centre lies
         beyond the plane (on the side ``normal`` points to) are left out, to look inside.
-    axes : (int, int, int)
-        The three axes of the slice in more than three dimensions, and their order: the third
-        points up on screen at elevation 0. ``axes=(2, 0, 1)`` stands up a mesh whose up is its
-        second axis (a cyclic order; any other order mirrors the picture).
+    axes : (int, int, int), optional
+        The three axes of the slice in more than three dimensions (default 0, 1, 2), and their
+        order. Given (and ``up="auto"``), the third points up: ``axes=(2, 0, 1)`` stands y up (a
+        cyclic order; any other order mirrors the picture).
     at : (d,) array_like, optional
         A point of the 3-D slice; default the centres' mean. Unused in 2-D and 3-D.
     supersample : int
@@ -98,6 +95,11 @@ def render(packing, path=None, size=(900, 900), view=(35.0, 25.0), cmap="viridis
     occlusion : bool
         Darken where nearer spheres surround a point (screen-space ambient occlusion): gaps,
         bores and pockets read as such.
+    up : str
+        The axis that points up on screen: ``"x"``, ``"y"``, ``"z"``, or ``"-x"``, ``"-y"``,
+        ``"-z"`` (pointing down). ``"auto"`` (default): from the shape, by
+        :func:`ndpack.pictures.view.choose_up`: the mesh file's convention (OBJ and glTF y-up,
+        STL z-up), else the longest extent when it is clearly longest, else z.
 
     Returns
     -------
@@ -109,18 +111,27 @@ def render(packing, path=None, size=(900, 900), view=(35.0, 25.0), cmap="viridis
     dim = packing.dim
     if dim < 2:
         raise DimensionError(f"cannot draw a {dim}-D packing: pictures need 2 or more dimensions")
+    described = ""
     if dim == 2:
+        if up != "auto":
+            choose_up(packing, up)  # a bad value is still explained
+            raise ParameterError(f"up={up!r} applies to pictures of 3-D packings; a 2-D one is drawn as it is")
         image = _circles_image(packing, width, height, cmap=cmap, background=background)
     else:
+        picked = None if axes is None else _check_axes(axes, dim)
+        chosen = choose_up(packing, up, picked)
+        axes = (0, 1, 2) if picked is None else picked
+        frame = screen_frame(axes.index(chosen.axis), chosen.sign)
         centers, radii, colour_radii = _visible_balls(packing, axes, at, clip)
-        colours = _colours(colour_radii, cmap)
-        image = cast_spheres(centers, radii, colours, size=(width, height), view=view, background=background,
-                             supersample=supersample, outline=outline, occlusion=occlusion,
-                             frame=_frame_balls(packing, axes, at))
+        frame_centers, frame_radii = _frame_balls(packing, axes, at)
+        image = cast_spheres(centers @ frame.T, radii, radius_colours(colour_radii, cmap), size=(width, height),
+                             view=view, background=background, supersample=supersample, outline=outline,
+                             occlusion=occlusion, frame=(frame_centers @ frame.T, frame_radii))
+        described = f"ndpack render: up {chosen}; view {tuple(float(v) for v in view)}; axes {axes}"
     if path is not None:
         import matplotlib.image
 
-        matplotlib.image.imsave(Path(path), image)
+        matplotlib.image.imsave(Path(path), image, metadata={"Description": described} if described else None)
     return image
 
 
@@ -151,7 +162,7 @@ def cast_spheres(centers, radii, colours, size=(900, 900), view=(35.0, 25.0), ba
     supersample = int(supersample)
     if supersample < 1:
         raise ParameterError(f"supersample must be a positive integer, got {supersample}")
-    background = np.asarray(_rgb(background), dtype=np.float64)
+    background = np.asarray(rgb(background), dtype=np.float64)
     right, up, towards = camera_axes(*view)
     frame_centers, frame_radii = (centers, radii) if frame is None else frame
     frame_centers = np.asarray(frame_centers, dtype=np.float64).reshape(-1, 3)
@@ -225,9 +236,6 @@ def _visible_balls(packing, axes, at, clip):
     sphere_radii : (k,) float64
         Radii of the spheres they come from, for the colours.
     """
-    from .plot import slice_balls
-
-    axes = _check_axes(axes, packing.dim)
     centers, radii, index = slice_balls(packing.centers, packing.radii, axes, at)
     if clip is not None:
         point, normal = _check_clip(clip, packing.dim)
@@ -238,9 +246,7 @@ def _visible_balls(packing, axes, at, clip):
 
 def _frame_balls(packing, axes, at):
     """The balls the picture frames: the whole slice, clipped or not."""
-    from .plot import slice_balls
-
-    centers, radii, _ = slice_balls(packing.centers, packing.radii, _check_axes(axes, packing.dim), at)
+    centers, radii, _ = slice_balls(packing.centers, packing.radii, axes, at)
     return centers, radii
 
 
@@ -282,61 +288,12 @@ def _coprime_stride(count):
     return stride
 
 
-def _colours(radii, cmap):
-    """RGB in [0, 1] of each radius through the colormap (its :data:`COLOUR_RANGE`), log-scaled
-    when radii span more than 10x.
-
-    Parameters
-    ----------
-    radii : (n,) float64
-    cmap : str or Colormap
-
-    Returns
-    -------
-    (n, 3) float64
-    """
-    import matplotlib
-
-    colormap = matplotlib.colormaps[cmap] if isinstance(cmap, str) else cmap
-    position = np.clip(np.ma.filled(radius_norm(radii)(radii), 0.0), 0.0, 1.0)
-    low, high = COLOUR_RANGE
-    return colormap(low + (high - low) * position)[:, :3].astype(np.float64)
-
-
-def radius_norm(radii):
-    """The Matplotlib norm for colouring by radius: logarithmic when the radii span more than 10x.
-
-    Parameters
-    ----------
-    radii : (n,) float64
-    """
-    from matplotlib.colors import LogNorm, Normalize
-
-    if len(radii) == 0:
-        return Normalize(0.0, 1.0)
-    low, high = float(np.min(radii)), float(np.max(radii))
-    if low > 0 and high > LOG_SPAN * low:
-        return LogNorm(low, high)
-    return Normalize(low, high if high > low else low + 1.0)
-
-
-def _rgb(colour):
-    from matplotlib.colors import to_rgb
-
-    try:
-        return to_rgb(colour)
-    except ValueError:
-        raise ParameterError(f"cannot read {colour!r} as a colour: use a name ('white') or '#rrggbb'") from None
-
-
 def _circles_image(packing, width, height, cmap, background, dpi=100):
-    """A 2-D packing drawn by :func:`ndpack.plot.plot`, as a (height, width, 3) uint8 image."""
+    """A 2-D packing drawn by :func:`ndpack.pictures.plot`, as a (height, width, 3) uint8 image."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from .plot import plot
-
-    figure = Figure(figsize=(width / dpi, height / dpi), dpi=dpi, facecolor=_rgb(background))
+    figure = Figure(figsize=(width / dpi, height / dpi), dpi=dpi, facecolor=rgb(background))
     canvas = FigureCanvasAgg(figure)
     plot(packing, ax=figure.add_subplot(), cmap=cmap)
     figure.tight_layout()
@@ -523,65 +480,6 @@ def _spiral(count, radius):
     distance = radius * np.sqrt(index / count)
     angle = index * math.pi * (3.0 - math.sqrt(5.0))
     return np.column_stack([distance * np.cos(angle), distance * np.sin(angle)])
-
-
-# ---------------------------------------------------------------------------------------------- entry point
-def picture(packing, path, kind="auto", **options):
-    """Write a picture of a packing; the file type follows the suffix. Returns the path.
-
-    Parameters
-    ----------
-    packing : Packing, or a list of them for ``kind="fill"``
-    path : str or Path
-        ``.png``, ``.svg`` or ``.pdf``.
-    kind : str
-        ``"auto"``: circles for a 2-D packing; in 3-D and more, the shaded :func:`render` for a
-        ``.png`` (of the 3-D slice beyond three dimensions) and a 2-D slice
-        (:func:`ndpack.plot.save_figure`) for ``.svg`` and ``.pdf``.
-        ``"render"``: the shaded render (PNG only). ``"slice"``: the circles of a 2-D packing
-        or of a 2-D slice (``axes=``, ``at=``). ``"fill"``: fill and uncovered fraction against
-        sphere count (:func:`ndpack.plot.save_fill_figure`).
-    **options
-        Passed on: to :func:`render` (``size``, ``view``, ``cmap``, ``background``, ``clip``,
-        ``axes``, ``at``, ...), :func:`ndpack.plot.save_figure` (``shape``, ``axes``, ``at``,
-        ``dpi``, ...) or :func:`ndpack.plot.save_fill_figure` (``log``, ``labels``, ``dpi``).
-    """
-    from . import plot
-
-    path = Path(path)
-    suffix = _check_suffix(path, SUFFIXES, "a picture")
-    if kind not in KINDS:
-        raise ParameterError(f"unknown picture kind {kind!r}; use one of: {', '.join(KINDS)}")
-    if kind == "fill":
-        _check_options(plot.save_fill_figure, options, "fill")
-        plot.save_fill_figure(packing, path, **options)
-        return path
-    dim = packing.dim
-    if dim < 2:
-        raise DimensionError(f"cannot draw a {dim}-D packing: pictures need 2 or more dimensions")
-    if kind == "auto":
-        kind = "render" if dim >= 3 and suffix in RENDER_SUFFIXES else "slice"
-    if kind == "render" and suffix not in RENDER_SUFFIXES:
-        raise ParameterError(
-            f"a shaded render is written as {' or '.join(RENDER_SUFFIXES)}, not {suffix}; "
-            f"use kind='slice' for a vector picture of a slice"
-        )
-    draw = render if kind == "render" else plot.save_figure
-    _check_options(draw, options, kind)
-    draw(packing, path, **options)
-    return path
-
-
-def _check_options(function, options: dict, kind: str) -> None:
-    """Refuse options ``function`` does not take with one line naming those it does."""
-    import inspect
-
-    accepted = [name for name in inspect.signature(function).parameters if name not in ("packing", "packings", "path")]
-    unknown = sorted(set(options) - set(accepted))
-    if unknown:
-        raise ParameterError(
-            f"a {kind} picture has no option {', '.join(unknown)}; its options: {', '.join(accepted)}"
-        )
 
 
 def _check_suffix(path, allowed, what):

@@ -783,3 +783,9 @@ def test_bad_input_raises(build, error):
     with pytest.raises(error) as info:
         build()
     assert len(str(info.value)) > 20  # says what was wrong
+
+
+def test_the_diagonal_of_the_bounds_is_the_unit_of_relative_figures():
+    assert Box([0, 0], [3, 4]).diagonal == pytest.approx(5.0)
+    assert (Ball([1, 1, 1], 1.0) - Ball([1, 1, 1], 0.5)).diagonal == pytest.approx(2 * np.sqrt(3))
+    assert HalfSpace([0, 0, 1], 0.0).diagonal == np.inf

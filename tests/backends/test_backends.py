@@ -3,7 +3,7 @@
 Compiled backends here: numba, warp (on CUDA where it works, else on the CPU), and numba-cuda
 where a GPU works. Without a GPU, numba-cuda runs the ``small`` tests under Numba's CUDA simulator
 in a subprocess (``test_numba_cuda_under_simulator``). On the GPU machine, the same file runs
-both GPU backends: ``python -m pytest tests/test_backends.py``.
+both GPU backends: ``python -m pytest tests/backends/test_backends.py``.
 """
 
 from __future__ import annotations
@@ -111,7 +111,7 @@ def test_small_geometry_queries_match_reference(name):
         )
 
 
-MESHES = os.path.join(os.path.dirname(__file__), "data", "meshes")
+MESHES = os.path.join(os.path.dirname(os.path.dirname(__file__)), "data", "meshes")
 
 
 @pytest.mark.parametrize("precision", ["float64", "float32"])
@@ -479,6 +479,16 @@ def test_bad_backend_requests_say_what_to_do():
     assert set(status) == {"numpy", "numba", "numba-cuda", "warp"}
     assert status["numpy"] == "ok" and status["numba"] == "ok"
     assert all(isinstance(reason, str) and reason for reason in status.values())
+
+
+def test_a_device_asked_for_where_no_gpu_backend_runs_is_refused_not_ignored(monkeypatch):
+    """Without a backend named, ``device="cuda:0"`` must not fall through to a CPU backend in
+    silence: the error says why each GPU backend cannot run and how to pack on the CPU."""
+    monkeypatch.delenv("NDPACK_BACKEND", raising=False)
+    monkeypatch.setattr(backends, "_cuda_driver_present", lambda: False)
+    with pytest.raises(BackendError, match=r"device 'cuda:0' asked for.*warp: no CUDA driver.*give 'cpu'"):
+        nd.pack(nd.Box([0, 0], [1, 1]), n=3, device="cuda:0")
+    assert nd.pack(nd.Box([0, 0], [1, 1]), n=3, device="cpu").params["backend"] in ("numba", "numpy")
 
 
 def test_missing_framework_says_how_to_install(monkeypatch):

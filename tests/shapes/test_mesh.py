@@ -19,7 +19,7 @@ from ndpack.verify import sphere_directions
 igl = pytest.importorskip("igl")
 trimesh = pytest.importorskip("trimesh")
 
-MESHES = Path(__file__).parent / "data" / "meshes"
+MESHES = Path(__file__).resolve().parents[1] / "data" / "meshes"
 CLOSED = ["cow", "fandisk", "rocker-arm", "armadillo-20k", "spot-unwelded"]
 
 

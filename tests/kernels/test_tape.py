@@ -15,7 +15,7 @@ import pytest
 import trimesh
 
 import ndpack as nd
-from ndpack.backends.base import compiled_program
+from ndpack.kernels.compiled import compiled_program
 from ndpack.kernels import tape as tapes
 from ndpack.kernels.compile import numba_evaluator
 from ndpack.kernels.tape import flatten

@@ -89,8 +89,9 @@ def test_packings_of_every_shape_are_valid(dim, name):
 )
 def test_greedy_order_is_largest_first_on_the_default_grid(shape):
     # On coarse grids one cell can hide a second, larger local maximum; on the default grid
-    # these shapes come out in exact largest-first order.
-    radii = nd.pack(shape, n=150, seed=0).radii
+    # these shapes come out in exact largest-first order (the faithful mode's; the fast mode
+    # takes a window of near-equal radii a round).
+    radii = nd.pack(shape, n=150, seed=0, mode="faithful").radii
     assert np.all(np.diff(radii) <= 1e-9 * radii[:-1])
 
 
@@ -108,7 +109,7 @@ def test_fill_statistics_grow_and_match_the_spheres():
 
 def test_batch_packs_disjoint_spheres_with_similar_fill():
     square = nd.Box([0, 0], [1, 1])
-    exact = nd.pack(square, n=300, seed=0)
+    exact = nd.pack(square, n=300, seed=0, mode="faithful")
     batched = nd.pack(square, n=300, batch=16, seed=0)
     assert batched.verify().ok
     assert len(batched) == 300
@@ -179,7 +180,7 @@ def test_interrupt_keeps_what_was_packed():
         if round.index == 4:
             raise KeyboardInterrupt  # what Ctrl-C raises
 
-    packing = nd.pack(nd.Box([0, 0], [1, 1]), n=1000, seed=0, on_round=interrupted_in_the_fifth_round)
+    packing = nd.pack(nd.Box([0, 0], [1, 1]), n=1000, seed=0, mode="faithful", on_round=interrupted_in_the_fifth_round)
     assert packing.stop_reason == "interrupted"
     assert len(packing) == 5 and packing.verify().ok
     assert len(packing.stats.count) == 5
@@ -293,6 +294,25 @@ def test_a_fast_packing_records_where_its_schedules_stop():
     assert packing.params["fast_eps_end"] == protosphere.FAST_EPS_END
     assert packing.params["fast_polish_eps_end"] == protosphere.FAST_POLISH_EPS_END
     assert "fast_eps_end" not in nd.pack(nd.Box([0, 0], [1, 1]), n=5, seed=0).params
+
+
+@pytest.mark.parametrize("dim, n, batch, chosen", [
+    (2, 101, 1, "fast"), (3, 101, 1, "fast"), (3, 100, 1, "faithful"), (4, 5000, 1, "faithful"),
+    (3, 5000, 4, "faithful"),
+])
+def test_auto_mode_is_fast_for_many_spheres_in_2d_and_3d_and_says_why(dim, n, batch, chosen):
+    mode, why = protosphere.choose_mode("auto", n, dim, batch)
+    assert mode == chosen and why.startswith("auto: ")
+    assert protosphere.choose_mode("faithful", n, dim, batch) == ("faithful", None)
+
+
+def test_the_default_mode_is_auto_and_records_what_it_ran():
+    few = nd.pack(nd.Box([0, 0], [1, 1]), n=10, seed=0, backend="numpy")
+    many = nd.pack(nd.Box([0, 0], [1, 1]), n=150, seed=0, backend="numpy")
+    assert few.params["mode"] == "faithful" and "n=10" in few.params["mode_why"]
+    assert many.params["mode"] == "fast" and "fast_eps_end" in many.params
+    asked = nd.pack(nd.Box([0, 0], [1, 1]), n=150, seed=0, backend="numpy", mode="faithful")
+    assert asked.params["mode"] == "faithful" and "mode_why" not in asked.params
 
 
 @pytest.mark.parametrize(

@@ -1,82 +1,21 @@
 """Pictures of packings with Matplotlib (imported only when a picture is asked for).
 
 A 2-D packing is drawn as its circles; a packing in any higher dimension as a slice: the circles
-in which the spheres meet a 2-D plane through ``at``, spanned by two coordinate ``axes``.
-:func:`save_figure` writes that picture to ``.png``, ``.svg`` or ``.pdf`` in one call;
-:func:`plot_fill` and :func:`save_fill_figure` draw the fill against the sphere count. Shaded 3-D
-pictures are in :mod:`ndpack.render`.
+in which the spheres meet a 2-D plane through ``at``, spanned by two coordinate ``axes``
+(:func:`ndpack.pictures.slices.slice_circles`); a 3-D packing's slice stands its up axis
+vertical (:func:`ndpack.pictures.view.choose_up`). :func:`save_figure` writes that picture to
+``.png``, ``.svg`` or ``.pdf`` in one call; :func:`plot_fill` and :func:`save_fill_figure` draw
+the fill against the sphere count. Shaded 3-D pictures are in :mod:`ndpack.pictures.raycast`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .errors import DimensionError, NdpackError, ParameterError
-
-
-def slice_balls(centers, radii, axes=(0, 1, 2), at=None):
-    """Balls cut from the spheres by the flat through ``at`` spanned by ``axes``.
-
-    A d-ball of radius ``r`` whose centre lies at distance ``h`` from the flat meets it in a ball
-    of radius ``sqrt(r**2 - h**2)`` about the centre's projection.
-
-    Parameters
-    ----------
-    centers : (n, d) float64
-    radii : (n,) float64
-    axes : sequence of k different ints
-        The coordinate axes of the flat.
-    at : (d,) array_like, optional
-        A point of the flat (its other coordinates fix the slice); default the centres' mean.
-
-    Returns
-    -------
-    ball_centers : (m, k) float64
-    ball_radii : (m,) float64
-    index : (m,) int64
-        Which sphere each ball comes from.
-    """
-    centers = np.asarray(centers, dtype=np.float64)
-    radii = np.asarray(radii, dtype=np.float64)
-    dim = centers.shape[1]
-    axes = [int(axis) for axis in axes]
-    if len(set(axes)) != len(axes) or not all(0 <= axis < dim for axis in axes):
-        raise DimensionError(f"axes must be {len(axes)} different axes of a {dim}-D packing, got {tuple(axes)}")
-    others = [k for k in range(dim) if k not in axes]
-    if not others:  # the flat is the whole space: every sphere, whole
-        return centers[:, axes], radii.copy(), np.arange(len(radii))
-    if at is None:
-        at = centers.mean(axis=0) if len(centers) else np.zeros(dim)
-    at = np.asarray(at, dtype=np.float64).reshape(-1)
-    if at.shape != (dim,):
-        raise DimensionError(f"at must be a point of the {dim}-D packing, got shape {at.shape}")
-    offset_sq = ((centers[:, others] - at[others]) ** 2).sum(axis=1)
-    index = np.flatnonzero(offset_sq < radii**2)
-    return centers[index][:, axes], np.sqrt(radii[index] ** 2 - offset_sq[index]), index
-
-
-def slice_circles(centers, radii, axes=(0, 1), at=None):
-    """Circles cut from the spheres by the plane through ``at`` spanned by ``axes``.
-
-    Parameters
-    ----------
-    centers : (n, d) float64
-    radii : (n,) float64
-    axes : (int, int)
-        The two coordinate axes of the plane.
-    at : (d,) array_like, optional
-        A point of the plane (its other coordinates fix the slice); default the centres' mean.
-
-    Returns
-    -------
-    circle_centers : (k, 2) float64
-    circle_radii : (k,) float64
-    index : (k,) int64
-        Which sphere each circle comes from.
-    """
-    if len(axes) != 2:
-        raise DimensionError(f"a plane has two axes, got {tuple(axes)}")
-    return slice_balls(centers, radii, axes, at)
+from ..errors import DimensionError, NdpackError, ParameterError
+from .colours import radius_norm
+from .slices import slice_circles
+from .view import choose_up, plane_axes
 
 
 def circle_collection(centers, radii, **options):
@@ -100,7 +39,8 @@ def circle_collection(centers, radii, **options):
     return PathCollection([Path(ring, unit.codes, readonly=True) for ring in vertices], **options)
 
 
-def plot(packing, shape=None, ax=None, axes=(0, 1), at=None, cmap="viridis", outline=True, rasterized=None):
+def plot(packing, shape=None, ax=None, axes=None, at=None, cmap="viridis", outline=True, rasterized=None,
+         up="auto"):
     """Draw a packing (2-D) or a slice of it (any dimension); returns the Matplotlib ``Axes``.
 
     Circles are coloured by the radius of their sphere (on a log scale when the radii span more
@@ -109,9 +49,18 @@ def plot(packing, shape=None, ax=None, axes=(0, 1), at=None, cmap="viridis", out
 
     Parameters
     ----------
+    axes : (int, int), optional
+        The horizontal and vertical axes of the plane. Default: (0, 1), except in 3-D, where
+        the plane through ``at`` holds the up axis (vertical) and the first other of x, y, z.
+    at : (d,) array_like, optional
+        A point of the plane; default the centres' mean.
     rasterized : bool, optional
         Draw the circles as an image inside vector output (SVG, PDF); default: above
         :data:`RASTERIZE_ABOVE` circles. The outline, axes and text stay vector.
+    up : str
+        Which axis points up, as in :func:`ndpack.pictures.render`: ``"auto"`` (default: from
+        the shape, :func:`ndpack.pictures.view.choose_up`; the second of ``axes`` when they are
+        given), ``"x"``, ``"y"``, ``"z"``, or ``"-x"``, ``"-y"``, ``"-z"`` (pointing down).
     """
     try:
         import matplotlib.pyplot as plt
@@ -119,8 +68,12 @@ def plot(packing, shape=None, ax=None, axes=(0, 1), at=None, cmap="viridis", out
         raise NdpackError(f"plotting needs matplotlib: pip install matplotlib ({error})") from error
     from matplotlib.colors import LogNorm
 
-    from .render import radius_norm
-
+    if axes is None and packing.dim != 3:
+        axes = (0, 1)
+    if axes is not None and len(axes) != 2:
+        raise DimensionError(f"a plane has two axes (horizontal, vertical), got {tuple(axes)}")
+    chosen = choose_up(packing, up, axes)
+    axes = plane_axes(chosen, axes)
     shape = packing.shape if shape is None else shape
     centers2, radii2, index = slice_circles(packing.centers, packing.radii, axes, at)
     if ax is None:
@@ -138,10 +91,10 @@ def plot(packing, shape=None, ax=None, axes=(0, 1), at=None, cmap="viridis", out
         lower, upper = np.zeros(2), np.ones(2)
     if outline and shape is not None:
         plane_point = packing.centers.mean(axis=0) if at is None else np.asarray(at, dtype=np.float64)
-        _draw_outline(ax, shape, axes, plane_point, lower, upper)
+        draw_outline(ax, shape, axes, plane_point, lower, upper)
     pad = 0.03 * (upper - lower).max()
     ax.set_xlim(lower[0] - pad, upper[0] + pad)
-    ax.set_ylim(lower[1] - pad, upper[1] + pad)
+    ax.set_ylim(*(lower[1] - pad, upper[1] + pad)[:: chosen.sign])
     ax.set_aspect("equal")
     ax.set_xlabel(f"x{axes[0]}")
     ax.set_ylabel(f"x{axes[1]}")
@@ -188,8 +141,8 @@ RASTERIZE_ABOVE = 5000
 FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
 
 
-def save_figure(packing, path, shape=None, axes=(0, 1), at=None, dpi=200, figsize=(6, 6), cmap="viridis",
-                outline=True, rasterized=None):
+def save_figure(packing, path, shape=None, axes=None, at=None, dpi=200, figsize=(6, 6), cmap="viridis",
+                outline=True, rasterized=None, up="auto"):
     """Draw a 2-D packing, or a 2-D slice of any packing, to a ``.png``, ``.svg`` or ``.pdf`` file.
 
     See :func:`plot` for the picture; ``dpi`` sets the PNG's resolution and that of the circles
@@ -198,7 +151,7 @@ def save_figure(packing, path, shape=None, axes=(0, 1), at=None, dpi=200, figsiz
     path = _figure_path(path)
     figure = _figure(figsize)
     plot(packing, shape=shape, ax=figure.add_subplot(), axes=axes, at=at, cmap=cmap, outline=outline,
-         rasterized=rasterized)
+         rasterized=rasterized, up=up)
     figure.savefig(path, dpi=dpi, bbox_inches="tight")
     return path
 
@@ -300,8 +253,22 @@ def _figure_path(path):
     return path
 
 
-def _draw_outline(ax, shape, axes, at, lower, upper, resolution=400):
-    """The zero contour of the shape's distance on the plane, sampled on a grid."""
+def draw_outline(ax, shape, axes, at, lower, upper, resolution=400):
+    """Draw the shape's outline on a plane: the zero contour of its distance, sampled on a grid.
+
+    Parameters
+    ----------
+    ax : Axes
+    shape : Oracle
+    axes : (int, int)
+        The plane's horizontal and vertical axes.
+    at : (d,) float64
+        A point of the plane.
+    lower, upper : (2,) float64
+        The corners of the region drawn, in the plane's coordinates.
+    resolution : int
+        Samples along each side.
+    """
     # Sample beyond the bounds: a shape touching its bounding box still gets a closed outline.
     pad = 0.02 * (upper - lower).max()
     u = np.linspace(lower[0] - pad, upper[0] + pad, resolution)

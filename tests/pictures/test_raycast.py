@@ -3,20 +3,32 @@ right circles, files are written, and mistakes are explained."""
 
 import subprocess
 import sys
+from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
 
-import matplotlib.image  # noqa: E402
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
+import matplotlib.image
+import numpy as np
+import pytest
 
-import ndpack as nd  # noqa: E402
-from ndpack.plot import plot, plot_fill, save_figure, save_fill_figure, slice_balls  # noqa: E402
-from ndpack.render import FRAME_MARGIN, cast_spheres, picture, render  # noqa: E402
+import ndpack as nd
+from ndpack.pictures import (
+    cast_spheres,
+    choose_up,
+    picture,
+    plot,
+    plot_fill,
+    render,
+    save_figure,
+    save_fill_figure,
+    slice_balls,
+)
+from ndpack.pictures.raycast import FRAME_MARGIN
 
 WHITE = np.array([255, 255, 255])
+MESH = Path(__file__).resolve().parents[1] / "data" / "meshes" / "cow.ply"
 
 
 def spheres(centers, radii):
@@ -70,9 +82,10 @@ def test_nearer_sphere_hides_the_farther_one():
 
 def test_clip_plane_removes_the_spheres_beyond_it():
     packing = spheres([[0.0, 0.0, 0.0], [0.0, 2.0, 0.0]], [0.5, 0.5])
-    whole = render(packing, size=(200, 100), view=(0, 0), occlusion=False)
+    # up="z": the pair is 3x longer along y, which "auto" would stand up.
+    whole = render(packing, size=(200, 100), view=(0, 0), occlusion=False, up="z")
     clipped = render(packing, size=(200, 100), view=(0, 0), clip=([0.0, 1.0, 0.0], [0.0, 1.0, 0.0]),
-                     occlusion=False)
+                     occlusion=False, up="z")
     # Screen x is the y coordinate: the second sphere is on the right half.
     assert covered(whole[:, 100:]).sum() > 1000 and covered(whole[:, :100]).sum() > 1000
     assert covered(clipped[:, 100:]).sum() == 0
@@ -203,10 +216,128 @@ def test_bad_suffix_kind_and_dimension_are_explained(tmp_path):
         render(packing, clip=([0, 0], [1, 0]))
 
 
-def test_importing_render_stays_light():
+def test_importing_pictures_stays_light():
     code = (
-        "import sys, ndpack.render, ndpack.plot; "
+        "import sys, ndpack.pictures, ndpack.pictures.raycast, ndpack.pictures.plots; "
         "print(','.join(m for m in ('numba', 'matplotlib') if m in sys.modules))"
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert result.stdout.strip() == ""
+
+
+# ---------------------------------------------------------------------------------------------- which way is up
+def column(axis, count=5):
+    """Touching unit-diameter spheres in a row along ``axis``: a tall box 5x longer than wide."""
+    centers = np.zeros((count, 3))
+    centers[:, axis] = np.arange(count)
+    return spheres(centers, np.full(count, 0.5))
+
+
+def covered_box(image):
+    """(height, width) in pixels of what the spheres cover."""
+    rows, columns = np.nonzero(covered(image))
+    return rows.max() - rows.min() + 1, columns.max() - columns.min() + 1
+
+
+def test_auto_up_stands_the_longest_extent_up():
+    for axis, name in ((1, "y"), (2, "z"), (0, "x")):
+        chosen = choose_up(column(axis))
+        assert (chosen.axis, chosen.sign, chosen.name) == (axis, 1, name)
+        assert "longest extent" in chosen.reason
+        height, width = covered_box(render(column(axis), size=(120, 120), view=(35, 0), occlusion=False))
+        assert height > 3 * width  # standing, not lying
+    # Nothing clearly longest (the demo part, 2 x 1.2 x 0.8, lies flat): z, as always.
+    block = spheres([[0, 0, 0], [1.0, 0, 0], [0, 0.6, 0], [1.0, 0.6, 0]], [0.4] * 4)
+    assert choose_up(block).name == "z" and "default" in choose_up(block).reason
+    # Beyond three dimensions the third axis of the slice stands up; given axes, the last.
+    assert choose_up(four_d_packing()).name == "z"
+    assert choose_up(column(2), axes=(2, 0, 1)).name == "y"
+
+
+def test_up_can_be_asked_for_and_turns_the_picture():
+    tall = column(1)
+    assert choose_up(tall, "z").name == "z" and choose_up(tall, "z").reason == "asked for"
+    assert (choose_up(tall, "-y").axis, choose_up(tall, "-y").sign) == (1, -1)
+    height, width = covered_box(render(tall, size=(120, 120), view=(0, 0), occlusion=False, up="z"))
+    assert width > 3 * height  # laid down along screen x
+    # Upside down: the red sphere on top (+z) goes to the bottom.
+    red, blue = [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]
+    pair = spheres([[0, 0, 1.0], [0, 0, -1.0]], [0.5, 0.5])
+    for up, red_on_top in (("z", True), ("-z", False)):
+        image = cast_spheres_of(pair, [red, blue], up)
+        top, bottom = image[30, 50].astype(int), image[90, 50].astype(int)
+        assert (top[0] > top[2]) == red_on_top and (bottom[0] > bottom[2]) != red_on_top
+    with pytest.raises(nd.ParameterError, match=r"auto, x, y, z, -x, -y, -z"):
+        render(tall, up="sideways")
+    with pytest.raises(nd.ParameterError, match="not one of the axes drawn"):
+        render(four_d_packing(), axes=(0, 1, 3), up="z")
+
+
+def cast_spheres_of(packing, colours, up):
+    """A render coloured ``colours`` (one per sphere) instead of by radius."""
+    import ndpack.pictures.raycast as raycast
+
+    original = raycast.radius_colours
+    raycast.radius_colours = lambda radii, cmap: np.asarray(colours, dtype=np.float64)
+    try:
+        return render(packing, size=(100, 120), view=(0, 0), occlusion=False, outline=False, up=up)
+    finally:
+        raycast.radius_colours = original
+
+
+def test_mesh_file_convention_decides_before_the_extent():
+    tower = column(2)  # clearly longest along z ...
+    for source, name in (("/data/tower.obj", "y"), ("scan.GLB", "y"), ("part.gltf", "y"), ("bracket.stl", "z"),
+                         ("print.3mf", "z")):
+        tower.params["source"] = source
+        chosen = choose_up(tower)
+        assert chosen.name == name and "by convention" in chosen.reason
+    tower.params["source"] = "scan.ply"  # ... no convention: the extent decides
+    assert choose_up(tower).name == "z" and "longest" in choose_up(tower).reason
+    tower.params["source"] = "box:dim=3"  # a built-in shape: no file
+    assert choose_up(tower).name == "z" and "longest" in choose_up(tower).reason
+    # A packing made in Python keeps the file's name on its TriangleMesh shape (PLY: no convention;
+    # this cow is y-up, 1.6x longer along x than y: the default, z).
+    packing = spheres([[0.0, 0.0, 0.0]], [0.1])
+    packing.shape = nd.TriangleMesh.load(MESH)
+    assert choose_up(packing).name == "z"
+    packing.shape.name = "cow.obj"
+    assert choose_up(packing).name == "y"
+
+
+def test_the_png_records_which_way_is_up(tmp_path):
+    from PIL import Image
+
+    render(column(1), tmp_path / "tall.png", size=(40, 40))
+    description = Image.open(tmp_path / "tall.png").info["Description"]
+    assert description.startswith("ndpack render: up y (the longest extent")
+
+
+def test_render_command_takes_up_and_says_which(tmp_path, capsys):
+    from ndpack.cli import main
+
+    path = column(1).save(tmp_path / "tall.npz")
+    image = tmp_path / "tall.png"
+    assert main(["render", str(path), "-o", str(image), "--size", "60x60"]) == 0
+    assert "up:    y (the longest extent, 5.0x the next)" in capsys.readouterr().out
+    for up in ("z", "-y"):
+        assert main(["render", str(path), "-o", str(image), "--size", "60x60", f"--up={up}"]) == 0
+        assert f"up:    {up} (asked for)" in capsys.readouterr().out
+    assert main(["render", str(path), "-o", str(tmp_path / "slice.svg"), "--up", "x"]) == 0
+    assert "up:    x (asked for)" in capsys.readouterr().out
+    assert main(["render", str(path), "-o", str(image), "--size", "60x60", "--up", "-y"]) == 0  # no `=` needed
+    assert "up:    -y (asked for)" in capsys.readouterr().out
+    with pytest.raises(SystemExit):
+        main(["render", str(path), "--up", "w"])
+    error = capsys.readouterr().err
+    assert "--up" in error and "'auto', 'x', 'y', 'z', '-x', '-y', '-z'" in error
+
+
+def test_render_help_says_how_to_turn_the_view(capsys):
+    from ndpack.cli import main
+
+    with pytest.raises(SystemExit):
+        main(["render", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "--up {auto,x,y,z,-x,-y,-z}" in text and "--view AZIMUTH,ELEVATION" in text and "--axes" in text
+    assert ".obj, .gltf, .glb: y" in text
