@@ -106,7 +106,8 @@ def main():
                 try:
                     entry = run(case, shape, backend, args.counts, batch, args.budget)
                 except Exception as error:  # noqa: BLE001 - one failing backend must not lose the rest
-                    entry = {"case": case, "backend": backend, "batch": batch, "error": f"{type(error).__name__}: {error}"}
+                    entry = {"case": case, "backend": backend, "batch": batch,
+                             "error": f"{type(error).__name__}: {error}"}
                 result["runs"].append(entry)
                 write_json(out, result)
                 print(_line(entry), flush=True)

@@ -87,8 +87,10 @@ def main():
             volumes = np.cumsum(nd.ball_volume(packing.dim, packing.radii)) / packing.volume
             run.update({f"fill_at_{k}": float(volumes[k - 1]) for k in args.fill_at if k <= len(volumes)})
             runs.append(run)
-            print(f"{name:10s} seed {seed}  {run['seconds']:6.2f} s  fill {run['fill']:.5f}  rounds {run['rounds']:3d}  "
-                  f"move steps {run['move_steps'] / 1e6:5.1f}M  polish steps {run['polish_steps'] / 1e6:5.1f}M", flush=True)
+            print(f"{name:10s} seed {seed}  {run['seconds']:6.2f} s  fill {run['fill']:.5f}  "
+                  f"rounds {run['rounds']:3d}  "
+                  f"move steps {run['move_steps'] / 1e6:5.1f}M  polish steps {run['polish_steps'] / 1e6:5.1f}M",
+                  flush=True)
     print(f"\n{'variant':10s} {'mean s':>7s} {'fill':>8s} {'rounds':>6s} {'move M':>7s} {'polish M':>8s}")
     for name in variants:
         mine = [r for r in runs if r["variant"] == name]

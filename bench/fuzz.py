@@ -150,12 +150,14 @@ def main(argv=None):
         write_json(args.out, {
             "command": "python bench/fuzz.py " + " ".join(argv if argv is not None else sys.argv[1:]),
             "machine": machine_info(), "ndpack_path": ndpack.__file__, "versions": versions(),
-            "trees": args.trees, "only": args.only, "seed": args.seed, "runs": args.runs, "budget": args.budget, "timeout": args.timeout,
+            "trees": args.trees, "only": args.only, "seed": args.seed, "runs": args.runs, "budget": args.budget,
+            "timeout": args.timeout,
             "extended": args.extended,
             "wall_seconds": round(time.perf_counter() - started, 1), "summary": summary, "records": records,
         })
     print(summary)
-    print(f"\n{len(records)} cases of {args.trees} trees in {time.perf_counter() - started:.0f} s; records in {args.out}")
+    print(f"\n{len(records)} cases of {args.trees} trees in {time.perf_counter() - started:.0f} s; "
+          f"records in {args.out}")
 
 
 def versions() -> dict:

@@ -126,7 +126,8 @@ def libigl_engines(mesh, points):
         kind = igl.SignedDistanceType.SIGNED_DISTANCE_TYPE_PSEUDONORMAL
         return igl.signed_distance(points, vertices, faces, kind)[0]
 
-    return [("libigl AABB unsigned", "cpu", build, unsigned), ("libigl signed_distance pseudonormal", "cpu", 0.0, signed)]
+    return [("libigl AABB unsigned", "cpu", build, unsigned),
+            ("libigl signed_distance pseudonormal", "cpu", 0.0, signed)]
 
 
 # ---------------------------------------------------------------------- run

@@ -70,7 +70,8 @@ def main():
     quantiles = np.quantile(ratios, [0, 0.01, 0.1, 0.5, 0.9, 1])
     print("clearance / last frontier, quantiles 0 1 10 50 90 100%:", " ".join(f"{q:.3f}" for q in quantiles))
     for q, count in ahead.items():
-        print(f"unpolished above {q:g} x the last frontier, summed over rounds: {count} ({count / total:.1f}x polished)")
+        print(f"unpolished above {q:g} x the last frontier, summed over rounds: {count} "
+              f"({count / total:.1f}x polished)")
 
 
 if __name__ == "__main__":

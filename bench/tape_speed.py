@@ -48,7 +48,8 @@ def deep_tree() -> nd.Oracle:
         cylinder = nd.Cylinder([0, 0, -0.5], [0, 0, 0.5], rng.uniform(0.05, 0.15))
         part = ((ball | box).offset(0.02) - capsule).smooth_union(cylinder, 0.05)
         angle = rng.uniform(0, np.pi)
-        parts.append(part.rotate(nd.rotation(3, angle)).scale_by(rng.uniform(0.6, 1.2)).translate(rng.uniform(-1, 1, 3)))
+        parts.append(part.rotate(nd.rotation(3, angle)).scale_by(rng.uniform(0.6, 1.2))
+                     .translate(rng.uniform(-1, 1, 3)))
     return nd.Union(*parts) & nd.Box([-1.5] * 3, [1.5] * 3)
 
 

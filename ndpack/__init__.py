@@ -38,7 +38,9 @@ from .verify import Verification, verify
 __version__ = "0.1.0"
 
 __all__ = [
-    "BackendError", "BoundsError", "KernelError", "DimensionError", "GridWarning", "InvalidPackingError", "MeshWarning", "NdpackError", "OracleError", "Oracle",
+    "BackendError", "BoundsError", "KernelError", "DimensionError", "GridWarning", "InvalidPackingError", "MeshWarning",
+    "NdpackError", "OracleError", "Oracle",
     "Packing", "ParameterError", "RepairWarning", "Round", "RoundStats", "ShapeError", "Verification", "Volume",
-    "ball_volume", "check_covering", "cover", "Covering", "CoverReport", "pack", "pack_sizes", "SizeDistribution", "SizeReport", "rotation", "verify", *_shape_names,
+    "ball_volume", "check_covering", "cover", "Covering", "CoverReport", "pack", "pack_sizes", "SizeDistribution",
+    "SizeReport", "rotation", "verify", *_shape_names,
 ]

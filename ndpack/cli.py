@@ -163,7 +163,8 @@ def _option(text: str) -> tuple:
 
 
 #: The help of --holes, which pack, verify and render share.
-HOLES_HELP = "an open mesh file: cap closes each hole with a fan of triangles (the default, with a warning), refuse exits"
+HOLES_HELP = ("an open mesh file: cap closes each hole with a fan of triangles (the default, with a warning), "
+              "refuse exits")
 HOLES_REUSE = "; default: what the packing records"
 HOLE_CHOICES = ("cap", "refuse")
 #: The help of --sign, which pack, cover, verify and render share.

@@ -295,7 +295,8 @@ class RunState:
                 raise ShapeError(
                     f"found no interior point of {self.shape!r}: not at the centres of the {int(keep.sum()):,} grid "
                     f"cells near it (of {total:,}), nor at {self.restarts} random points in each, nor by "
-                    f"{FIND_STEPS} steps across its boundary from the {min(FIND_POINTS, int(keep.sum())):,} nearest; the "
+                    f"{FIND_STEPS} steps across its boundary from the "
+                    f"{min(FIND_POINTS, int(keep.sum())):,} nearest; the "
                     "shape is empty (check the CSG) or much thinner than a cell (pass a finer grid=)")
         if thin:
             warnings.warn(

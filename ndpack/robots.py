@@ -55,6 +55,7 @@ import numpy as np
 
 from .covering import CHECK_SAMPLES, Covering, check_covering, cover
 from .errors import NdpackError, ParameterError, ShapeError
+from .io import curobo_yaml
 from .meshes import surface
 from .shapes.mesh import TriangleMesh
 from .shapes.primitives import Ball, Box, Cylinder
@@ -482,8 +483,6 @@ def cover_urdf(path, out_dir, *, n: int | None = None, protrusion: float | None 
     yaml_out = out_dir / f"{_file_name(robot)}_spheres.yml"
     report_out = out_dir / "report.json"
     _write_sphere_urdf(path, urdf_out, coverings)
-    from .io import curobo_yaml
-
     yaml_out.write_text(curobo_yaml({name: (c.centers, c.radii) for name, c in coverings.items()},
                                     comment=f"cuRobo collision spheres of {robot!r} ({path.name}), written by ndpack: "
                                     "each link's spheres in its own frame"))

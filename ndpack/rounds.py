@@ -225,9 +225,9 @@ class Fast:
         A level's halves are split again on their reach, tightened by the spheres (the bound a
         converged prototype adds, its clearance plus the way to the cell's farthest corner,
         exceeds half the cell's longest side, so it could keep a cell this long from splitting
-        only where its prototype had died), so that no prototype moves between levels: on a GPU a move launch costs its longest
-        convergence however few prototypes move, and a level each had cost a launch, a
-        neighbour table and its synchronisations.
+        only where its prototype had died), so that no prototype moves between levels: on a GPU
+        a move launch costs its longest convergence however few prototypes move, and a level
+        each had cost a launch, a neighbour table and its synchronisations.
 
         The prototypes the round's spheres ``touched`` (a :class:`~ndpack.protosphere.Touched`)
         restart in the same launch; a touched prototype whose cell splits restarts in its half.

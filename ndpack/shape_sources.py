@@ -27,6 +27,7 @@ from pathlib import Path
 from .named_shapes import BUILTIN, from_spec, registered
 from .errors import ShapeError
 from .oracle import Oracle
+from .samples import SAMPLES
 from .shapes.adapters import as_oracle
 from .shapes.mesh import TriangleMesh
 
@@ -180,8 +181,6 @@ def describe(source: str) -> str:
 
 def _sample_hint(path: Path) -> str:
     """For a missing file named like a sample mesh (``cow.obj``): how to get it."""
-    from .samples import SAMPLES
-
     if path.stem in SAMPLES:
         return f" (the docs' sample meshes: `ndpack samples` writes {path.stem}.obj and the others here)"
     return ""

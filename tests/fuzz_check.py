@@ -12,9 +12,10 @@ missed; the anchors aim the samples where spheres touch the boundary.
 Outcomes (:data:`OUTCOMES`): ``valid``; ``clear error`` (an ``NdpackError``, while building the tree
 or packing it, on a shape the reference finds empty or for a reason other than emptiness, such as
 a NumPy plug-in on a compiled backend); ``refused non-empty`` (a ``ShapeError`` while building the
-tree or from ``nd.pack``, or no sphere at all, on a shape in which the reference finds inside points); ``repaired`` (ndpack's own final check had to shrink or drop
-spheres: a bug it caught); ``invalid`` (the check here fails); ``crash`` (any other exception);
-``timeout`` (the time budget ran out first).
+tree or from ``nd.pack``, or no sphere at all, on a shape in which the reference finds inside
+points); ``repaired`` (ndpack's own final check had to shrink or drop spheres: a bug it caught);
+``invalid`` (the check here fails); ``crash`` (any other exception); ``timeout`` (the time
+budget ran out first).
 """
 
 from __future__ import annotations
@@ -188,7 +189,8 @@ def _pack_and_judge(case, shape, backend, mode, time_budget) -> dict:
     result = dict(count=len(packing), stop_reason=packing.stop_reason, fill=round(float(packing.fill), 5),
                   warnings=warned, samples=check.samples, worst_overlap=check.worst_overlap)
     if not check.ok:
-        result.update(outcome="invalid", outside=check.outside[:20].tolist(), overlapping=check.overlapping[:20].tolist(),
+        result.update(outcome="invalid", outside=check.outside[:20].tolist(),
+                      overlapping=check.overlapping[:20].tolist(),
                       worst_point=None if check.worst is None else check.worst.tolist())
     elif "RepairWarning" in warned:
         result.update(outcome="repaired", repair=str(packing.repair)[:500])

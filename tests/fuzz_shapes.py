@@ -239,7 +239,8 @@ class Drawer:
         lengths = self.rng.uniform(0.5, 2.0, len(units))  # ndpack normalises the rows
         normals, offsets = units * lengths[:, None], (units @ c + heights) * lengths
         # The simplex's own vertices bound the polytope: each is where d of its facets meet.
-        vertices = np.array([np.linalg.solve(np.delete(units[: d + 1], j, 0), np.delete(units[: d + 1] @ c + heights[: d + 1], j))
+        vertices = np.array([np.linalg.solve(np.delete(units[: d + 1], j, 0),
+                                             np.delete(units[: d + 1] @ c + heights[: d + 1], j))
                              for j in range(d + 1)])
         return Part(f"nd.ConvexPolytope({text(normals)}, {text(offsets)})", ref.polytope(normals, offsets, vertices))
 
@@ -295,7 +296,8 @@ class Drawer:
             "cylinder": f"cylinder(radius={num(size / 2)}, height={num(rng.uniform(0.4, 1.4))}, "
                         f"sections={rng.integers(8, 40)})",
             "capsule": f"capsule(height={num(rng.uniform(0.2, 1.0))}, radius={num(size / 2)}, count=[12, 12])",
-            "cone": f"cone(radius={num(size / 2)}, height={num(rng.uniform(0.4, 1.2))}, sections={rng.integers(8, 40)})",
+            "cone": f"cone(radius={num(size / 2)}, height={num(rng.uniform(0.4, 1.2))}, "
+                    f"sections={rng.integers(8, 40)})",
             "annulus": f"annulus(r_min={num(size / 3)}, r_max={num(size * 0.8)}, height={num(rng.uniform(0.2, 0.8))}, "
                        f"sections={rng.integers(12, 40)})",
             "torus": f"torus(major_radius={num(size * 0.7)}, minor_radius={num(size * 0.25)}, "
@@ -340,10 +342,12 @@ class Drawer:
     def leaf_shapely(self):
         rng = self.rng
         c = self.point()
-        code = f"shapely.Point({num(c[0])}, {num(c[1])}).buffer({num(rng.uniform(0.3, 0.8))}, quad_segs={rng.integers(2, 16)})"
+        code = (f"shapely.Point({num(c[0])}, {num(c[1])}).buffer({num(rng.uniform(0.3, 0.8))}, "
+                f"quad_segs={rng.integers(2, 16)})")
         other = self.point()
         if rng.random() < 0.5:
-            code += f".difference(shapely.box({num(other[0])}, {num(other[1])}, {num(other[0] + 0.5)}, {num(other[1] + 0.3)}))"
+            code += (f".difference(shapely.box({num(other[0])}, {num(other[1])}, "
+                     f"{num(other[0] + 0.5)}, {num(other[1] + 0.3)}))")
         else:
             code += f".union(shapely.Point({num(other[0])}, {num(other[1])}).buffer({num(rng.uniform(0.1, 0.4))}))"
         return Part(code, foreign_reference("shapely", code), foreign="shapely")
@@ -465,7 +469,8 @@ class Drawer:
         parts = [p if not p.foreign else self.leaf_native() for p in parts]
         joined = ", ".join(p.code for p in parts)
         code = f"nd.Union({joined})" if self.rng.random() < 0.5 else "(" + " | ".join(p.code for p in parts) + ")"
-        return Part(code, ref.union(*[p.reference for p in parts]), frozenset().union(*[p.kinds for p in parts]) | {"union"})
+        return Part(code, ref.union(*[p.reference for p in parts]),
+                    frozenset().union(*[p.kinds for p in parts]) | {"union"})
 
     def node_intersection(self, depth):
         native = {"manifold": lambda a, b: f"({a} ^ {b})", "cross_section": lambda a, b: f"({a} ^ {b})",
@@ -502,7 +507,8 @@ class Drawer:
             code = f"({inverse} & {a.code})"
         else:
             code = f"({a.code} & {inverse})"
-        return Part(code, ref.intersection(a.reference, ref.complement(b.reference)), a.kinds | b.kinds | {"complement"})
+        return Part(code, ref.intersection(a.reference, ref.complement(b.reference)),
+                    a.kinds | b.kinds | {"complement"})
 
     def node_smooth_union(self, depth):
         a, b = self.exact(depth), self.exact(depth)
@@ -523,7 +529,8 @@ class Drawer:
     def node_shell(self, depth):
         a = self.exact(depth)
         thickness = self.rng.uniform(0.05, 0.3)
-        code = f"{a.code}.shell({num(thickness)})" if self.rng.random() < 0.5 else f"nd.Shell({a.code}, {num(thickness)})"
+        code = (f"{a.code}.shell({num(thickness)})" if self.rng.random() < 0.5
+                else f"nd.Shell({a.code}, {num(thickness)})")
         return Part(code, ref.shell(a.reference, thickness), a.kinds | {"shell"})
 
     def _affine(self, part: Part, matrix, center, kind, shift=0.0) -> Part:
@@ -547,7 +554,8 @@ class Drawer:
         if part.foreign and part.foreign != "trimesh":
             return self._affine_shift(part, shift)
         part = self._ndpack(part)
-        code = f"{part.code}.translate({text(shift)})" if self.rng.random() < 0.5 else f"nd.Translate({part.code}, {text(shift)})"
+        code = (f"{part.code}.translate({text(shift)})" if self.rng.random() < 0.5
+                else f"nd.Translate({part.code}, {text(shift)})")
         return Part(code, ref.translated(part.reference, shift), part.kinds | {"translate"})
 
     def _affine_shift(self, part, shift):

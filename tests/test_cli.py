@@ -430,3 +430,19 @@ def test_sign_option_is_recorded_and_a_crossing_mesh_says_how_inside_is_told(tmp
     assert run("verify", str(out)).returncode == 0
     refused = run("pack", "box:dim=3", "-n", "3", "--sign", "winding")
     assert refused.returncode == 2 and "--sign applies to a mesh file" in refused.stderr
+
+
+def test_samples_writes_the_files_the_docs_use_and_a_missing_one_says_how_to_get_it(tmp_path, capsys):
+    from ndpack.cli import main
+
+    assert main(["samples", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
+    assert all(name in printed for name in ("cow.obj", "fandisk.obj", "armadillo.obj", "arm.urdf"))
+    cow = nd.TriangleMesh.load(tmp_path / "cow.obj")
+    assert cow.dim == 3 and "5804 triangles" in repr(cow)
+    assert "<robot name=\"arm\">" in (tmp_path / "arm.urdf").read_text()
+    assert main(["samples", str(tmp_path), "--suffix", ".stl"]) == 0 and (tmp_path / "fandisk.stl").exists()
+    assert main(["samples", str(tmp_path), "--suffix", "stl"]) == 2
+    assert "--suffix is a file suffix" in capsys.readouterr().err
+    assert main(["pack", str(tmp_path / "nowhere" / "cow.obj")]) == 2
+    assert "`ndpack samples` writes cow.obj" in capsys.readouterr().err

@@ -80,7 +80,8 @@ def test_spheres_beyond_the_shapes_volume_are_refused_in_either_mode(on_invalid)
     square = nd.Box([0, 0], [1, 1])
     assert _ensure_valid(square_packing(1.0), square, 1e-10, on_invalid=on_invalid).repair is None
     # Valid spheres, an impossible fill (a wrong volume): nothing can repair that.
-    with pytest.raises(nd.InvalidPackingError, match=r"exceeds the shape's volume 0.5 \(exact\): a fill of 1.004") as info:
+    with pytest.raises(nd.InvalidPackingError,
+                       match=r"exceeds the shape's volume 0.5 \(exact\): a fill of 1.004") as info:
         _ensure_valid(square_packing(0.5), square, 1e-10, on_invalid=on_invalid)
     assert len(info.value.packing) == 4 and "error.packing" in str(info.value)
 

@@ -18,6 +18,7 @@ import os
 import re
 import subprocess
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -185,18 +186,36 @@ def test_console_blocks_are_compared_and_a_wrong_figure_fails(tmp_path):
     assert result.returncode == 0, result.stderr[-2000:]
 
 
-@pytest.mark.parametrize("name", [page for page in PAGES if page_path(page).exists()])
-def test_page_steps_run_in_order(name, tmp_path):
+RUN_PAGES = [page for page in PAGES if page_path(page).exists() and steps(page_path(page))]
+#: Pages run side by side (each in its own process): CI has 2 cores, and a page spends much of its
+#: time in one (compiling, packing on NumPy).
+PAGES_AT_ONCE = 2
+
+
+def run_page(name: str, folder: Path) -> subprocess.CompletedProcess:
+    """Run a page's steps in ``folder``, with the sample files there as `ndpack samples` writes them."""
     import ndpack.samples
 
-    if not steps(page_path(name)):
-        pytest.skip(f"{name} has no steps")
-    ndpack.samples.write(tmp_path)  # the pages' meshes, as `ndpack samples` makes them
-    (tmp_path / "steps.py").write_text(step_script(page_path(name)))
-    result = subprocess.run(
-        [sys.executable, "steps.py"], cwd=tmp_path, capture_output=True, text=True, timeout=900,
+    ndpack.samples.write(folder)
+    (folder / "steps.py").write_text(step_script(page_path(name)))
+    return subprocess.run(
+        [sys.executable, "steps.py"], cwd=folder, capture_output=True, text=True, timeout=900,
         env={**os.environ, "MPLBACKEND": "Agg", "NDPACK_BACKEND": "numpy"},
     )
+
+
+@pytest.fixture(scope="module")
+def page_runs(tmp_path_factory):
+    """Every page's run, started at once on :data:`PAGES_AT_ONCE` workers; each test waits for its own."""
+    pool = ThreadPoolExecutor(PAGES_AT_ONCE)
+    runs = {name: pool.submit(run_page, name, tmp_path_factory.mktemp(name.replace(".", "_"))) for name in RUN_PAGES}
+    yield runs
+    pool.shutdown(wait=True)
+
+
+@pytest.mark.parametrize("name", RUN_PAGES)
+def test_page_steps_run_in_order(name, page_runs):
+    result = page_runs[name].result()
     assert result.returncode == 0, f"a step in {name} failed:\n{result.stderr[-3000:]}"
 
 

@@ -7,7 +7,8 @@ import sys
 def test_import_pulls_in_no_heavy_framework():
     code = (
         "import sys, ndpack; "
-        "heavy = [m for m in ('warp', 'numba', 'numba.cuda', 'numba_cuda', 'matplotlib', 'trimesh', 'manifold3d') if m in sys.modules]; "
+        "heavy = [m for m in ('warp', 'numba', 'numba.cuda', 'numba_cuda', 'matplotlib', 'trimesh', 'manifold3d') "
+        "if m in sys.modules]; "
         "print(','.join(heavy))"
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -62,7 +62,8 @@ def test_touched_through_the_index_matches_the_reference(dim):
     np.testing.assert_array_equal(NumbaBackend().touched(points, clearance, new_centers, new_radii), expected)
 
 
-@pytest.mark.parametrize("shape", [nd.Ball(np.zeros(3), 1.0), nd.Box(-np.ones(2), np.ones(2)) - nd.Ball(np.zeros(2), 0.3)])
+@pytest.mark.parametrize("shape", [nd.Ball(np.zeros(3), 1.0),
+                                   nd.Box(-np.ones(2), np.ones(2)) - nd.Ball(np.zeros(2), 0.3)])
 def test_walls_spare_evaluations_without_changing_results(shape):
     """A wall lets the kernel skip the shape where a sphere is surely nearer: same numbers."""
     rng = np.random.default_rng(4)
@@ -221,7 +222,8 @@ def test_fast_mode_polishes_only_the_candidates_it_keeps(monkeypatch):
 def test_fast_mode_splits_cells_and_the_cells_still_tile_the_grid():
     shape = nd.Box(np.zeros(2), np.ones(2))
     states = []
-    packing = nd.pack(shape, 4000, mode="fast", backend="numba", grid=16, on_round=lambda round: states.append(round.state))
+    packing = nd.pack(shape, 4000, mode="fast", backend="numba", grid=16,
+                      on_round=lambda round: states.append(round.state))
     store = states[0].prototypes
     assert len(store) > 16 * 16  # cells split where the gaps became small
     sizes = store.cell_upper - store.cell_lower

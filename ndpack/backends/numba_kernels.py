@@ -2,8 +2,9 @@
 
 This file is read as text, not imported: :func:`ndpack.kernels.compile.numba_namespace` runs it
 in the namespace of a compiled program, where ``sd(p, prm)`` is the signed distance of the shape
-whose numbers are ``prm``, ``D`` the dimension, and ``point()`` a local array of length ``D``. Every function mirrors a step of :class:`ndpack.backends.numpy_backend.NumpyBackend`,
-the reference it is tested against.
+whose numbers are ``prm``, ``D`` the dimension, and ``point()`` a local array of length ``D``.
+Every function mirrors a step of :class:`ndpack.backends.numpy_backend.NumpyBackend`, the
+reference it is tested against.
 
 Array arguments: ``points``, ``lower``, ``upper``, ``centers`` (n, D) float64; ``radii``,
 ``steps``, ``prm`` 1-D float64; ``nbr`` (n, k) int64 neighbour table padded with ``len(radii)``;

@@ -122,7 +122,8 @@ class WarpBackend(Backend):
             wp, device = self.wp, self.device
 
             def empty(capacity, d):
-                return wp.empty(capacity, dtype=module.VecD, device=device), wp.empty(capacity, dtype=module.F, device=device)
+                return (wp.empty(capacity, dtype=module.VecD, device=device),
+                        wp.empty(capacity, dtype=module.F, device=device))
 
             def write(centers, radii, start, host_centers, host_radii):
                 wp.copy(centers, self._array(host_centers, module.VecD), dest_offset=start)
@@ -178,7 +179,8 @@ class WarpBackend(Backend):
         if len(points):
             self.wp.launch(module.converge_all, dim=len(points), device=self.device, inputs=[
                 self._points(module, points), self._points(module, cell_lower), self._points(module, cell_upper),
-                self._array(wall, module.F), params, d_centers, d_radii, table, self._array(steps, module.F), h, out_points, out_clearance,
+                self._array(wall, module.F), params, d_centers, d_radii, table, self._array(steps, module.F), h,
+                out_points, out_clearance,
             ])
         return (out_points.numpy().reshape(len(points), -1).astype(np.float64),
                 out_clearance.numpy().astype(np.float64))

@@ -140,7 +140,8 @@ def converge_from(x: VecD, lower: VecD, upper: VecD, wall: F, prm: wp.array(dtyp
 
 @wp.kernel
 def converge_all(points: wp.array(dtype=VecD), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
-                 wall: wp.array(dtype=F), prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
+                 wall: wp.array(dtype=F), prm: wp.array(dtype=F), centers: wp.array(dtype=VecD),
+                 radii: wp.array(dtype=F),
                  nbr: wp.array2d(dtype=wp.int32), steps: wp.array(dtype=F), h: F,
                  out_points: wp.array(dtype=VecD), out_clearance: wp.array(dtype=F)):
     i = wp.tid()
@@ -233,7 +234,8 @@ def max_all(count: int, clearance: wp.array(dtype=F), below: F, out: wp.array(dt
 
 
 @wp.kernel
-def select_all(count: int, clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32), points: wp.array(dtype=VecD),
+def select_all(count: int, clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32),
+               points: wp.array(dtype=VecD),
                low: F, high: F, unpolished: int, top: wp.array(dtype=F), relative: F,
                counter: wp.array(dtype=wp.int32), out_ids: wp.array(dtype=wp.int32), out_values: wp.array(dtype=F),
                out_points: wp.array(dtype=VecD), out_flags: wp.array(dtype=wp.int32)):
@@ -451,7 +453,8 @@ def lower_floats(ids: wp.array(dtype=wp.int32), values: wp.array(dtype=F), out: 
 @wp.kernel
 def split_mark(count: int, lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD), reach: wp.array(dtype=F),
                points: wp.array(dtype=VecD), clearance: wp.array(dtype=F), bound: wp.array(dtype=F), low: F,
-               longest: F, counter: wp.array(dtype=wp.int32), out_ids: wp.array(dtype=wp.int32), out_values: wp.array(dtype=F),
+               longest: F, counter: wp.array(dtype=wp.int32), out_ids: wp.array(dtype=wp.int32),
+               out_values: wp.array(dtype=F),
                out_points: wp.array(dtype=VecD), out_flags: wp.array(dtype=wp.int32)):
     """Append the cells that may split, with their tightened bounds (the host store's
     ``split_candidates``); every cell looked at keeps its tighter bound."""

@@ -167,6 +167,7 @@ def _build(box_lower, box_upper, centroids, leaf_size, bins, max_depth):
             order[begin:end] = order[begin:end][np.argsort(keys, kind="mergesort")]
         count[node] = 0
         pending[top, 0], pending[top, 1], pending[top, 2], pending[top, 3] = middle, end, node, depth + 1
-        pending[top + 1, 0], pending[top + 1, 1], pending[top + 1, 2], pending[top + 1, 3] = begin, middle, node, depth + 1
+        (pending[top + 1, 0], pending[top + 1, 1], pending[top + 1, 2],
+         pending[top + 1, 3]) = begin, middle, node, depth + 1
         top += 2
     return order, lower[:nodes].copy(), upper[:nodes].copy(), first[:nodes].copy(), count[:nodes].copy()

@@ -81,8 +81,8 @@ def read(path) -> "trimesh.Trimesh":  # noqa: F821
         raise ShapeError(f"{path!r} holds a {kind}, not a triangle mesh{hint}")
     broken = int(np.count_nonzero(~np.isfinite(loaded.vertices).all(axis=1)))
     if broken:
-        raise ShapeError(f"the mesh file {path!r} has {broken} {'vertex' if broken == 1 else 'vertices'} with non-finite "
-                         "coordinates (NaN or infinity): repair or remove them in the file")
+        raise ShapeError(f"the mesh file {path!r} has {broken} {'vertex' if broken == 1 else 'vertices'} "
+                         "with non-finite coordinates (NaN or infinity): repair or remove them in the file")
     # Not trimesh's process(): its welding tolerance is absolute (1e-8), which merges a small
     # mesh's vertices; prepare() does the same work relative to the mesh's size.
     if len(loaded.faces) == 0:
@@ -100,7 +100,8 @@ def check_arrays(vertices, faces) -> tuple[np.ndarray, np.ndarray]:
         hint = ""
         if vertices.ndim == 2 and vertices.shape[1] == 2:
             hint = "; a 2-D outline is an ndpack.Polygon (or a manifold3d.CrossSection)"
-        raise DimensionError(f"a triangle mesh needs 3-D vertices, an array of shape (v, 3); got {vertices.shape}{hint}")
+        raise DimensionError(f"a triangle mesh needs 3-D vertices, an array of shape (v, 3); "
+                             f"got {vertices.shape}{hint}")
     if len(vertices) == 0:
         raise ShapeError("the mesh has no vertices: vertices has shape (0, 3)")
     broken = ~np.isfinite(vertices).all(axis=1)

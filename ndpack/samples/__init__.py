@@ -20,6 +20,7 @@ from importlib import resources
 from pathlib import Path
 
 from ..errors import ParameterError
+from ..shapes.mesh import TriangleMesh
 
 #: name -> what it is: triangles and where it comes from.
 SAMPLES = {
@@ -46,8 +47,6 @@ def path(name: str) -> Path:
 
 def load(name: str, **options):
     """A sample as a :class:`~ndpack.TriangleMesh` (``options`` as for ``TriangleMesh.load``)."""
-    from ..shapes.mesh import TriangleMesh
-
     return TriangleMesh.load(path(name), **options)
 
 

@@ -5,9 +5,10 @@ manifold3d solid is a valid empty set, and a tree that holds one is still a shap
 is ``a``, ``a | empty`` is ``a``, ``a & empty`` is empty. The operators (``|``, ``&``, ``-``,
 ``~`` and the transforms, see :class:`ndpack.oracle.Oracle`) apply these rules as a tree is
 built, and so do the node classes (``Union(a, empty)`` is ``a``, see
-:class:`ndpack.shapes.csg._Node`), so an :class:`Empty` or :class:`Everything` is only ever a whole shape, never a node's
-part, and no kernel evaluates one. Only an empty *whole* shape is an error, raised where it is
-packed (:func:`ndpack.oracle.check_packable`) with the reason it is empty.
+:class:`ndpack.shapes.csg._Node`), so an :class:`Empty` or :class:`Everything` is only ever a
+whole shape, never a node's part, and no kernel evaluates one. Only an empty *whole* shape is
+an error, raised where it is packed (:func:`ndpack.oracle.check_packable`) with the reason it
+is empty.
 """
 
 from __future__ import annotations

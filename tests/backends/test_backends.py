@@ -153,7 +153,8 @@ def test_small_converge_matches_reference(name):
     centers, radii = np.array([[0.3, 0.3]]), np.array([0.2])
     neighbours = np.zeros((60, 1), dtype=np.int64)
     steps = cooling_schedule(30)
-    expected_points, expected_clearance = REFERENCE.converge(shape, points, lower, upper, centers, radii, neighbours, steps)
+    expected_points, expected_clearance = REFERENCE.converge(shape, points, lower, upper, centers, radii, neighbours,
+                                                             steps)
     got_points, got_clearance = backend.converge(shape, points, lower, upper, centers, radii, neighbours, steps)
     # Finite-difference and analytic directions differ by ~1e-10; the zig-zag around a Voronoi
     # node amplifies that, but both end at the same node with the same clearance.

@@ -32,7 +32,8 @@ def test_every_tree_of_a_dimension_shares_one_program():
         ball,
         nd.Ball([1.0, 2.0, 3.0], 0.001),
         nd.Box([0, 0, 0], [2.7, 2.7, 2.7]) - ball,
-        (nd.Box([0, 0, 0], [1, 1, 1]) | nd.Capsule([0, 0, 0], [1.5, 1.5, 0], 0.3)) - nd.Cylinder([0, 0, -1], [0, 0, 1], 0.2),
+        (nd.Box([0, 0, 0], [1, 1, 1]) | nd.Capsule([0, 0, 0], [1.5, 1.5, 0], 0.3))
+        - nd.Cylinder([0, 0, -1], [0, 0, 1], 0.2),
         nd.Torus([0, 0, 0], 1.0, 0.3).rotate(nd.rotation(3, 0.4, (1, 2))).scale_by(3.0).offset(0.1).shell(0.05),
         ball.smooth_union(nd.Ellipsoid([1, 0, 0], [0.5, 0.3, 0.2]), 0.2) & ~nd.Slab([0, 0, 1], -0.1, 0.1),
     ]

@@ -43,7 +43,8 @@ def test_manifolds_mix_with_ndpack_shapes_in_csg():
 
 
 def test_manifold_part_offset_inward_packs_inside():
-    solid = manifold3d.Manifold.cube([3.0, 2.0, 1.0]) - manifold3d.Manifold.cylinder(2.0, 0.5, 0.5, 32).translate([1.5, 1.0, -0.5])
+    solid = (manifold3d.Manifold.cube([3.0, 2.0, 1.0])
+             - manifold3d.Manifold.cylinder(2.0, 0.5, 0.5, 32).translate([1.5, 1.0, -0.5]))
     mesh = as_oracle(solid)
     packing = nd.pack(mesh.offset(-0.05), n=40, seed=0, backend="numpy", progress=False)
     assert packing.verify().ok
@@ -57,7 +58,8 @@ def test_invalid_and_empty_manifolds_say_what_is_wrong():
                            tri_verts=np.array([[0, 1, 2], [0, 3, 1]], dtype=np.uint32))
     with pytest.raises(ShapeError, match="not valid.*NotManifold"):
         nd.pack(manifold3d.Manifold(mesh), n=5)
-    empty = manifold3d.Manifold.cube([1.0, 1.0, 1.0]) - manifold3d.Manifold.cube([2.0, 2.0, 2.0]).translate([-0.5, -0.5, -0.5])
+    empty = (manifold3d.Manifold.cube([1.0, 1.0, 1.0])
+             - manifold3d.Manifold.cube([2.0, 2.0, 2.0]).translate([-0.5, -0.5, -0.5]))
     box = nd.Box([0, 0, 0], [1, 1, 1])
     assert box - empty is box  # an empty part of a tree is left out (tests/shapes/test_empty.py)
     with pytest.raises(ShapeError, match="nothing to pack: the manifold3d solid is empty"):
@@ -65,7 +67,8 @@ def test_invalid_and_empty_manifolds_say_what_is_wrong():
 
 
 def test_cross_section_is_an_exact_polygon_with_holes():
-    section = manifold3d.CrossSection.square([4.0, 4.0]) - manifold3d.CrossSection.square([2.0, 2.0]).translate([1.0, 1.0])
+    section = (manifold3d.CrossSection.square([4.0, 4.0])
+               - manifold3d.CrossSection.square([2.0, 2.0]).translate([1.0, 1.0]))
     polygon = as_oracle(section)
     assert isinstance(polygon, nd.Polygon) and polygon.volume().value == pytest.approx(12.0)
     frame = nd.Box([0, 0], [4, 4]) - nd.Box([1, 1], [3, 3])

@@ -140,14 +140,17 @@ def test_smooth_union_is_a_conservative_fillet():
 
 
 def test_gradients_match_finite_differences_away_from_kinks():
-    shape = ((nd.Box([-1, -1, -1], [1, 1, 1]) - nd.Ball([1, 1, 1], 0.8)) | nd.Capsule([0, 0, 0], [2, 0, 0], 0.3)).rotate(
+    shape = (
+        (nd.Box([-1, -1, -1], [1, 1, 1]) - nd.Ball([1, 1, 1], 0.8)) | nd.Capsule([0, 0, 0], [2, 0, 0], 0.3)
+    ).rotate(
         nd.rotation(3, 0.5, (0, 2))
     ).translate([0.1, 0.2, 0.3])
     points = sample(-1.5, 1.5, count=2000, dim=3)
     distance, gradient = shape.distance_and_gradient(points)
     step = 1e-6
     numeric = np.stack(
-        [(shape.distance(points + step * e) - shape.distance(points - step * e)) / (2 * step) for e in np.eye(3)], axis=1
+        [(shape.distance(points + step * e) - shape.distance(points - step * e)) / (2 * step) for e in np.eye(3)],
+        axis=1,
     )
     smooth = np.abs(np.linalg.norm(numeric, axis=1) - 1) < 1e-6  # off the kinks, |grad| is 1
     assert smooth.mean() > 0.8

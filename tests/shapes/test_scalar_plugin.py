@@ -54,7 +54,10 @@ def test_gyroid_example_is_conservative_and_matches_python():
     assert gyroid.check_lipschitz(samples=2000) <= 1 + 1e-6
 
 
-@pytest.mark.parametrize("name", [n for n in _installed() if n != "numba-cuda" or not __import__("os").environ.get("NUMBA_ENABLE_CUDASIM")])
+@pytest.mark.parametrize(
+    "name",
+    [n for n in _installed() if n != "numba-cuda" or not __import__("os").environ.get("NUMBA_ENABLE_CUDASIM")],
+)
 def test_gyroid_packs_on_every_backend(name):
     packing = nd.pack(gyroid, 30, grid=6, backend=name)
     assert packing.params["backend"] == name
@@ -211,7 +214,8 @@ def test_entry_point_shapes_are_found(monkeypatch):
     fake = type(sys)("tests_ring_factory")
     fake.make = lambda inner=0.3: nd.ScalarFunction(ring, 2, [[-1, -1], [1, 1]], params=[inner, 0.9])
     monkeypatch.setitem(sys.modules, "tests_ring_factory", fake)
-    monkeypatch.setattr("importlib.metadata.entry_points", lambda group: [entry] if group == named_shapes.ENTRY_POINT_GROUP else [])
+    monkeypatch.setattr("importlib.metadata.entry_points",
+                        lambda group: [entry] if group == named_shapes.ENTRY_POINT_GROUP else [])
     shape = from_spec("ring:inner=0.5")
     assert shape.params.tolist() == [0.5, 0.9]
     assert "ring" in named_shapes.registered()
