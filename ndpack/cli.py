@@ -190,6 +190,7 @@ def _parser() -> argparse.ArgumentParser:
     from .named_shapes import BUILTIN
     from .covering import CHECK_SAMPLES, DEFAULT_SAMPLES
     from .io import table
+    from .pictures.view import UP_CHOICES
 
     parser = argparse.ArgumentParser(
         prog="ndpack",
@@ -292,7 +293,7 @@ def _parser() -> argparse.ArgumentParser:
                         help="auto: circles in 2-D, a shaded render in 3-D and up; slice: circles cut by a "
                         "plane; fill: fill against count")
     render.add_argument("--size", type=_size, help="WIDTHxHEIGHT of a shaded render (default 900x900)")
-    render.add_argument("--up", choices=("auto", "x", "y", "z", "-x", "-y", "-z"),
+    render.add_argument("--up", choices=UP_CHOICES,
                         help="the axis that points up on screen (-y: y pointing down). auto "
                         "(default): the mesh file's convention (.obj, .gltf, .glb: y; .stl, .3mf: z), else the "
                         "longest extent when clearly longest, else z; a slice shows it vertical")
@@ -386,6 +387,9 @@ def _pack(args) -> int:
     for note in mesh_notes(shape):
         print(f"note:     {note}")
     print(f"spheres:  {len(packing)} ({STOP_REASONS.get(packing.stop_reason, packing.stop_reason)})")
+    if len(packing) == 1 and packing.stop_reason == "no_room":
+        print(f"note:     one sphere fills the shape (a ball is its own largest sphere); for a packing, try a "
+              f"ball with a hole: annulus:dim={shape.dim}")
     print(f"fill:     {packing.fill:.4f}{_plus_minus(packing.fill_error) if packing.volume_error else ''}")
     print(f"verified: {report.summary()}")
     if packing.repair:

@@ -446,3 +446,13 @@ def test_samples_writes_the_files_the_docs_use_and_a_missing_one_says_how_to_get
     assert "--suffix is a file suffix" in capsys.readouterr().err
     assert main(["pack", str(tmp_path / "nowhere" / "cow.obj")]) == 2
     assert "`ndpack samples` writes cow.obj" in capsys.readouterr().err
+
+
+def test_a_shape_one_sphere_fills_says_so_and_what_to_try(capsys):
+    from ndpack.cli import main
+
+    assert main(["pack", "ball:dim=4", "-n", "50", "--grid", "6"]) == 0
+    printed = capsys.readouterr().out
+    assert "spheres:  1 (no room left)" in printed and "annulus:dim=4" in printed
+    assert main(["pack", "annulus:dim=4", "-n", "20", "--grid", "6"]) == 0
+    assert "one sphere fills" not in capsys.readouterr().out
