@@ -26,6 +26,7 @@ from .errors import (
     ShapeError,
 )
 from .covering import CoverReport, Covering, check_covering, cover
+from .many import ManyResult, pack_many
 from .oracle import Oracle, Volume, ball_volume
 from .packing import Packing, RoundStats
 from .protosphere import Round, pack, pack_sizes
@@ -41,6 +42,7 @@ __all__ = [
     "BackendError", "BoundsError", "KernelError", "DimensionError", "GridWarning", "InvalidPackingError", "MeshWarning",
     "NdpackError", "OracleError", "Oracle",
     "Packing", "ParameterError", "RepairWarning", "Round", "RoundStats", "ShapeError", "Verification", "Volume",
-    "ball_volume", "check_covering", "cover", "Covering", "CoverReport", "pack", "pack_sizes", "SizeDistribution",
+    "ball_volume", "check_covering", "cover", "Covering", "CoverReport", "ManyResult", "pack", "pack_many",
+    "pack_sizes", "SizeDistribution",
     "SizeReport", "rotation", "verify", *_shape_names,
 ]

@@ -28,9 +28,13 @@ PACK_EXAMPLES = """examples:
   ndpack pack annulus -n 2000 --batch 8 -o ring.csv
   ndpack pack box:dim=3 -n 100000 --backend warp --device cuda:0 -o cube.npz
   ndpack pack cow.obj -n 3000 -o cow.json --format curobo --option link=cow
+  ndpack pack parts/*.stl -n 5000 -o out/       # many parts, on every core: out/<part>.npz, out/manifest.json
 
 SHAPE is a built-in name[:key=value,...], a mesh file (.obj .stl .ply .off .glb ...), a Python
 script (.py) that sets `shape`, or module:function. Built-in shapes: {shapes}.
+Several shapes (or a folder, for the mesh files in it, or a pattern such as 'parts/*.stl') are
+packed at once (--workers), each to -o FOLDER/<name>.npz (or --format), with FOLDER/manifest.json;
+run again, the parts already made are skipped. Exit 1 if a part failed (the others are written).
 Ctrl-C stops the run and still writes what was packed to --output. An output that cannot be
 written is refused before packing; a save that fails later (a full disk) keeps the packing as
 .npz beside it, in the current folder or in the temporary folder, and the error says where.
@@ -202,8 +206,9 @@ def _parser() -> argparse.ArgumentParser:
 
     pack = commands.add_parser("pack", help="pack a shape and save the spheres", formatter_class=raw,
                                epilog=PACK_EXAMPLES.format(shapes=", ".join(BUILTIN), formats=table()))
-    pack.add_argument("shape", nargs="?", default="demo",
-                      help="built-in spec, mesh file, .py script or module:function (default: demo)")
+    pack.add_argument("shape", nargs="*", default=["demo"],
+                      help="built-in spec, mesh file, .py script or module:function (default: demo); several, "
+                      "a folder of meshes or a glob pattern pack many parts, each to -o FOLDER/")
     pack.add_argument("--dim", type=int, help="dimension of a built-in shape (same as :dim=)")
     pack.add_argument("--holes", choices=HOLE_CHOICES, help=HOLES_HELP)
     pack.add_argument("--sign", choices=SIGN_CHOICES, help=SIGN_HELP)
@@ -237,6 +242,8 @@ def _parser() -> argparse.ArgumentParser:
     pack.add_argument("--on-invalid", choices=("repair", "raise"),
                       help="should the final float64 check fail: repair (shrink or drop the spheres, and "
                       "say so; the default) or raise (exit 2, nothing saved)")
+    pack.add_argument("--workers", type=_positive_int,
+                      help="several shapes: parts packed at once, each in its own process (default: all cores)")
     pack.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
 
     cover = commands.add_parser("cover", help="cover a shape, or each link of a robot (URDF), with spheres",
@@ -344,6 +351,10 @@ def _pack(args) -> int:
     from .shapes.mesh import mesh_notes
     from .shape_sources import describe, load_shape
 
+    shapes, many = _expand_shapes(args.shape)
+    if many or len(shapes) > 1 or (args.output and _is_folder(args.output)):
+        return _pack_many(args, shapes)
+    args.shape = shapes[0]
     called = time.perf_counter()
     source = args.shape
     if args.dim is not None:
@@ -406,6 +417,76 @@ def _pack(args) -> int:
               file=sys.stderr)
         return 130
     return 0 if report.ok else 1
+
+
+#: The suffixes of the mesh files a folder given to ``ndpack pack`` stands for (those trimesh reads).
+FOLDER_MESH_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".3mf")
+
+
+def _expand_shapes(given: list[str]) -> tuple[list[str], bool]:
+    """The shapes ``ndpack pack`` was given, a folder expanded to its mesh files and a pattern with
+    ``*`` to the files it matches (where the shell did not: quoted, or on Windows); and whether a
+    folder or a pattern was among them (so that a folder of one part still writes to a folder)."""
+    import glob
+
+    shapes, expanded = [], False
+    for text in given or ["demo"]:
+        path = Path(text).expanduser()
+        if path.is_dir():
+            found = sorted(str(p) for p in path.iterdir() if p.is_file() and p.suffix.lower() in FOLDER_MESH_SUFFIXES)
+            if not found:
+                raise ParameterError(f"no mesh files ({' '.join(FOLDER_MESH_SUFFIXES)}) in the folder {text}")
+            shapes += found
+            expanded = True
+        elif "*" in text and not path.exists():
+            found = sorted(glob.glob(str(path)))
+            if not found:
+                raise ParameterError(f"no file matches {text}")
+            shapes += found
+            expanded = True
+        else:
+            shapes.append(text)
+    return shapes, expanded
+
+
+def _is_folder(output: str) -> bool:
+    return output.endswith(("/", os.sep)) or Path(output).expanduser().is_dir()
+
+
+def _pack_many(args, shapes: list[str]) -> int:
+    """``ndpack pack`` of several shapes: each part through :func:`~ndpack.many.pack_many`, to a folder."""
+    from .many import pack_many
+    from .shape_sources import is_mesh_file
+
+    if args.output and not _is_folder(args.output):
+        raise ParameterError(f"{len(shapes)} shapes are written to a folder, one file each: give -o a folder "
+                             f"ending in / (e.g. -o out/), not {args.output}")
+    if args.option:
+        raise ParameterError("--option applies to one output file: pack the part alone for a format option")
+    if args.periodic is not None:
+        raise ParameterError("--periodic applies to one shape: pack the parts one by one to make them periodic")
+    if not args.output and args.format:
+        raise ParameterError("--format describes the output files: give the folder with -o FOLDER/")
+    if args.dim is not None:  # to each built-in spec, as for one shape; a file keeps its own dimension
+        shapes = [text if is_mesh_file(text) or text.lower().endswith(".py")
+                  else text + ("," if ":" in text else ":") + f"dim={args.dim}" for text in shapes]
+    started = time.perf_counter()
+    result = pack_many(
+        shapes, n=args.count, out=args.output, format=args.format or "npz", workers=args.workers,
+        progress=not args.quiet and sys.stderr.isatty(), holes=args.holes, sign=args.sign,
+        min_radius=args.min_radius, max_radius=args.max_radius, fill=args.fill, time_budget=args.time_budget,
+        grid=args.grid, iterations=args.iterations, batch=args.batch, mode=args.mode, seed=args.seed,
+        backend=args.backend, device=args.device, on_invalid=args.on_invalid, centers_only=args.centers_only,
+    )
+    print(result.summary())
+    if not args.output:
+        print("saved:    nothing (give -o FOLDER/ to keep the spheres)")
+    print(f"time:     {time.perf_counter() - started:.2f} s in all, {len(shapes)} parts")
+    if result.interrupted:
+        print("ndpack: interrupted; " + ("kept the parts finished" if args.output else "nothing saved (no --output)"),
+              file=sys.stderr)
+        return 130
+    return 0 if result.ok else 1
 
 
 def _pack_keeping_invalid(pack, output: str | None, shape, **options):

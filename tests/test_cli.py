@@ -442,6 +442,8 @@ def test_samples_writes_the_files_the_docs_use_and_a_missing_one_says_how_to_get
     assert cow.dim == 3 and "5804 triangles" in repr(cow)
     assert "<robot name=\"arm\">" in (tmp_path / "arm.urdf").read_text()
     assert main(["samples", str(tmp_path), "--suffix", ".stl"]) == 0 and (tmp_path / "fandisk.stl").exists()
+    assert main(["samples", str(tmp_path / "new" / "parts")]) == 0 and (tmp_path / "new" / "parts" / "cow.obj").exists()
+    assert main(["samples", str(tmp_path / "cow.obj")]) == 2
     assert main(["samples", str(tmp_path), "--suffix", "stl"]) == 2
     assert "--suffix is a file suffix" in capsys.readouterr().err
     assert main(["pack", str(tmp_path / "nowhere" / "cow.obj")]) == 2

@@ -1,4 +1,4 @@
-"""Importing ndpack stays light: no GPU framework, no plotting."""
+"""Importing ndpack stays light: no GPU framework, no plotting, no Dask (only pack_many(client=...) needs it)."""
 
 import subprocess
 import sys
@@ -7,7 +7,8 @@ import sys
 def test_import_pulls_in_no_heavy_framework():
     code = (
         "import sys, ndpack; "
-        "heavy = [m for m in ('warp', 'numba', 'numba.cuda', 'numba_cuda', 'matplotlib', 'trimesh', 'manifold3d') "
+        "heavy = [m for m in ('warp', 'numba', 'numba.cuda', 'numba_cuda', 'matplotlib', 'trimesh', 'manifold3d', "
+        "'dask', 'distributed') "
         "if m in sys.modules]; "
         "print(','.join(heavy))"
     )

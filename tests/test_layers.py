@@ -28,7 +28,7 @@ LAYERS = (
                 "ndpack.packing")),
     # Files, pictures, robots, named shapes and shape sources: ndpack and the world outside.
     ("outside", ("ndpack.io", "ndpack.pictures", "ndpack.robots", "ndpack.named_shapes", "ndpack.shape_sources",
-                 "ndpack.samples")),
+                 "ndpack.samples", "ndpack.many")),
     ("top", ("ndpack.cli", "ndpack")),
 )
 

@@ -51,8 +51,8 @@ def load(name: str, **options):
 
 
 def write(folder=".", names: list[str] | None = None, suffix: str = ".obj", robot: bool = True) -> list[Path]:
-    """Write the sample meshes into ``folder`` as ``<name><suffix>`` (any mesh suffix trimesh
-    writes), and the robot as ``arm.urdf`` unless ``robot`` is False.
+    """Write the sample meshes into ``folder`` (made if missing) as ``<name><suffix>`` (any mesh
+    suffix trimesh writes), and the robot as ``arm.urdf`` unless ``robot`` is False.
 
     Returns
     -------
@@ -62,8 +62,9 @@ def write(folder=".", names: list[str] | None = None, suffix: str = ".obj", robo
     import trimesh
 
     folder = Path(folder).expanduser()
-    if not folder.is_dir():
-        raise ParameterError(f"cannot write the samples into {folder}: no such folder")
+    if folder.exists() and not folder.is_dir():
+        raise ParameterError(f"cannot write the samples into {folder}: it is a file, not a folder")
+    folder.mkdir(parents=True, exist_ok=True)
     written = []
     for name in names or list(SAMPLES):
         mesh = trimesh.load(path(name), force="mesh")
