@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 import ndpack as nd
-from ndpack.protosphere import AUTO_FAST_ABOVE, AUTO_FAST_DIMS
+from ndpack.protosphere import AUTO_FAST_ABOVE, AUTO_FAST_DIMS, choose_mode
 
 from _common import machine_info, write_json
 
@@ -63,7 +63,7 @@ def main():
         for count in args.counts:
             faithful_s, faithful_fill = timed(shape, count, "faithful", args.repeats)
             fast_s, fast_fill = timed(shape, count, "fast", args.repeats)
-            auto = "fast" if shape.dim in AUTO_FAST_DIMS and count > AUTO_FAST_ABOVE else "faithful"
+            auto = choose_mode("auto", count, shape.dim, 1)[0]
             rows.append(dict(shape=name, dim=shape.dim, count=count, faithful_s=faithful_s, fast_s=fast_s,
                              faithful_fill=faithful_fill, fast_fill=fast_fill, auto=auto))
             print(f"| {name} | {count:,} | {faithful_s:.2f} | {fast_s:.2f} | {fast_s / faithful_s:.2f} | "

@@ -195,6 +195,7 @@ def _parser() -> argparse.ArgumentParser:
     from .covering import CHECK_SAMPLES, DEFAULT_SAMPLES
     from .io import table
     from .pictures.view import UP_CHOICES
+    from .protosphere import AUTO_FAST_ABOVE
 
     parser = argparse.ArgumentParser(
         prog="ndpack",
@@ -233,8 +234,8 @@ def _parser() -> argparse.ArgumentParser:
     pack.add_argument("--iterations", type=int, default=50, help="prototype steps (default 50)")
     pack.add_argument("--batch", type=int, default=1, help="spheres per round in the faithful mode (default 1)")
     pack.add_argument("--mode", choices=("auto", "faithful", "fast"), default="auto",
-                      help="auto (default): fast for more than 100 spheres in 2-D and 3-D, else faithful; "
-                      "faithful: the paper's rounds, one sphere each; fast: many spheres a round and a "
+                      help=f"auto (default): fast for more than {AUTO_FAST_ABOVE} spheres in 2-D and 3-D, else "
+                      "faithful; faithful: the paper's rounds, one sphere each; fast: many spheres a round and a "
                       "grid refined where gaps are small, for large counts")
     pack.add_argument("--seed", type=_seed, default=0, help="random seed, an integer >= 0 (default 0)")
     pack.add_argument("--backend", help="numpy, numba, numba-cuda or warp (default: $NDPACK_BACKEND or the fastest)")
@@ -356,9 +357,7 @@ def _pack(args) -> int:
         return _pack_many(args, shapes)
     args.shape = shapes[0]
     called = time.perf_counter()
-    source = args.shape
-    if args.dim is not None:
-        source += ("," if ":" in source else ":") + f"dim={args.dim}"
+    source = _with_dim(args.shape, args.dim)
     shape = load_shape(source, args.holes, args.sign)
     if args.periodic is not None:
         from .shapes.periodic import Periodic
@@ -423,6 +422,14 @@ def _pack(args) -> int:
 FOLDER_MESH_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".3mf")
 
 
+def _with_dim(spec: str, dim: int | None) -> str:
+    """``--dim``, added to a built-in spec as ``:dim=`` (``box`` -> ``box:dim=4``, ``annulus:inner=0.3`` ->
+    ``annulus:inner=0.3,dim=4``); the spec as it is without one."""
+    if dim is None:
+        return spec
+    return spec + ("," if ":" in spec else ":") + f"dim={dim}"
+
+
 def _expand_shapes(given: list[str]) -> tuple[list[str], bool]:
     """The shapes ``ndpack pack`` was given, a folder expanded to its mesh files and a pattern with
     ``*`` to the files it matches (where the shell did not: quoted, or on Windows); and whether a
@@ -469,7 +476,7 @@ def _pack_many(args, shapes: list[str]) -> int:
         raise ParameterError("--format describes the output files: give the folder with -o FOLDER/")
     if args.dim is not None:  # to each built-in spec, as for one shape; a file keeps its own dimension
         shapes = [text if is_mesh_file(text) or text.lower().endswith(".py")
-                  else text + ("," if ":" in text else ":") + f"dim={args.dim}" for text in shapes]
+                  else _with_dim(text, args.dim) for text in shapes]
     started = time.perf_counter()
     result = pack_many(
         shapes, n=args.count, out=args.output, format=args.format or "npz", workers=args.workers,
@@ -553,9 +560,7 @@ def _cover(args) -> int:
     from .covering import cover
     from .shape_sources import describe, load_shape
 
-    source = args.shape
-    if args.dim is not None:
-        source += ("," if ":" in source else ":") + f"dim={args.dim}"
+    source = _with_dim(args.shape, args.dim)
     shape = load_shape(source, args.holes, args.sign)
     options = dict(args.option)
     if args.output:
@@ -649,8 +654,10 @@ def _recorded_shape(packing, override: str | None, required: bool, trust: bool =
               file=sys.stderr)
         return None
     if is_mesh_file(str(source)):
-        holes = _recorded_holes(packing) if holes is None else holes
-        sign = _recorded_sign(packing) if sign is None else sign
+        if holes is None:
+            holes = _recorded_choice(packing, "holes", HOLE_CHOICES, "pass --holes cap or --holes refuse")
+        if sign is None:
+            sign = _recorded_choice(packing, "sign", SIGN_CHOICES, "pass --sign")
     return _with_recorded_period(load_shape(str(source), holes, sign), packing)
 
 
@@ -668,22 +675,13 @@ def _with_recorded_period(shape, packing):
     return Periodic(shape, [period is not None for period in periods])
 
 
-def _recorded_holes(packing) -> str | None:
-    """The packing's ``params["holes"]``, checked: a file may hold anything."""
-    holes = packing.params.get("holes")
-    if holes is not None and holes not in HOLE_CHOICES:
-        raise NdpackError(f"this packing records holes={holes!r}, which is none of {', '.join(HOLE_CHOICES)}: "
-                          "pass --holes cap or --holes refuse")
-    return holes
-
-
-def _recorded_sign(packing) -> str | None:
-    """The packing's ``params["sign"]``, checked: a file may hold anything."""
-    sign = packing.params.get("sign")
-    if sign is not None and sign not in SIGN_CHOICES:
-        raise NdpackError(f"this packing records sign={sign!r}, which is none of {', '.join(SIGN_CHOICES)}: "
-                          "pass --sign")
-    return sign
+def _recorded_choice(packing, key: str, choices: tuple, advice: str) -> str | None:
+    """The packing's ``params[key]`` (``"holes"``, ``"sign"``), checked against ``choices``: a file
+    may hold anything."""
+    value = packing.params.get(key)
+    if value is not None and value not in choices:
+        raise NdpackError(f"this packing records {key}={value!r}, which is none of {', '.join(choices)}: {advice}")
+    return value
 
 
 def _verify(args) -> int:

@@ -31,6 +31,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .errors import NdpackError, ParameterError
+from .io import FORMATS, check, load, save
+from .protosphere import pack
+from .shape_sources import describe, is_mesh_file, load_shape
 
 #: The manifest's name inside ``out``.
 MANIFEST = "manifest.json"
@@ -143,8 +146,6 @@ def pack_many(sources, n: int = 1000, *, out=None, format: str = "npz", client=N
     """
     from tqdm.auto import tqdm
 
-    from .io import FORMATS, check
-
     if isinstance(sources, (str, os.PathLike)):
         raise ParameterError(f"sources is a list of parts, got the one string {str(sources)!r}: pass [source], or "
                              f"sorted(glob.glob('folder/*.stl')) for a folder")
@@ -222,10 +223,6 @@ class _Task:
 def _pack_one(task: _Task) -> tuple[dict, object]:
     """Pack one part (in a worker): its record's new fields, and the packing where it is not
     written (else None). Any error becomes the record's one-line ``error``."""
-    from .io import save
-    from .protosphere import pack
-    from .shape_sources import describe, is_mesh_file, load_shape
-
     started = time.perf_counter()
     try:
         source = task.source
@@ -365,8 +362,6 @@ def _label(source) -> str:
 def _names(sources: list) -> list[str]:
     """A file name per source (``cow`` for ``parts/cow.obj``, ``box_dim_3`` for ``box:dim=3``,
     ``part<i>`` for a shape object); clashes (case aside) get ``-2``, ``-3``, ..."""
-    from .shape_sources import is_mesh_file
-
     names, taken = [], set()
     for i, source in enumerate(sources):
         if isinstance(source, (str, os.PathLike)):
@@ -401,8 +396,6 @@ def _asked(n, options: dict) -> dict:
     few agree)."""
     import inspect
 
-    from .protosphere import pack
-
     defaults = {name: _jsonable(parameter.default) for name, parameter in inspect.signature(pack).parameters.items()
                 if parameter.default is not parameter.empty}
     asked = {name: _jsonable(value) for name, value in options.items()}
@@ -425,8 +418,6 @@ def _write_manifest(path: Path, parts: list, format: str) -> None:
 def _resume(parts: list, manifest: Path, format: str) -> None:
     """Mark ``skipped`` the parts an earlier run made: the manifest says done (or skipped) for the
     same source, file name and params, and the file is there and loads."""
-    from .io import load
-
     try:
         earlier = json.loads(manifest.read_text())
         recorded = {entry["name"]: entry for entry in earlier["parts"]} if earlier.get("format") == format else {}
@@ -455,8 +446,6 @@ class _Lazy(Mapping):
 
     def __getitem__(self, name: str):
         if self._packings[name] is None:
-            from .io import load
-
             self._packings[name] = load(*self._files[name])
         return self._packings[name]
 

@@ -307,12 +307,24 @@ def _kernels():
     """The binning and ray-casting kernels, compiled by Numba (cached on disk after the first run)."""
     import numba
 
-    global prange
+    global prange, _tile_span
     prange = numba.prange
+    if not isinstance(_tile_span, numba.core.dispatcher.Dispatcher):  # called from the binning kernel
+        _tile_span = numba.njit(cache=True)(_tile_span)
     bin_spheres = numba.njit(cache=True)(_bin_spheres)
     cast = numba.njit(parallel=True, cache=True, fastmath=True)(_cast)
     occlude = numba.njit(parallel=True, cache=True, fastmath=True)(_occlude)
     return bin_spheres, cast, occlude
+
+
+def _tile_span(x, y, r, tile, tiles_x, tiles_y):
+    """The first and last tile column and row that a circle of centre ``(x, y)`` and radius ``r``
+    (pixels) touches, clipped to the screen."""
+    x0 = max(int(math.floor((x - r) / tile)), 0)
+    x1 = min(int(math.floor((x + r) / tile)), tiles_x - 1)
+    y0 = max(int(math.floor((y - r) / tile)), 0)
+    y1 = min(int(math.floor((y + r) / tile)), tiles_y - 1)
+    return x0, x1, y0, y1
 
 
 def _bin_spheres(pixel_x, pixel_y, pixel_r, tile, tiles_x, tiles_y):
@@ -328,11 +340,7 @@ def _bin_spheres(pixel_x, pixel_y, pixel_r, tile, tiles_x, tiles_y):
     n = pixel_x.shape[0]
     starts = np.zeros(tiles_x * tiles_y + 1, dtype=np.int64)
     for k in range(n):
-        x, y, r = pixel_x[k], pixel_y[k], pixel_r[k]
-        x0 = max(int(math.floor((x - r) / tile)), 0)
-        x1 = min(int(math.floor((x + r) / tile)), tiles_x - 1)
-        y0 = max(int(math.floor((y - r) / tile)), 0)
-        y1 = min(int(math.floor((y + r) / tile)), tiles_y - 1)
+        x0, x1, y0, y1 = _tile_span(pixel_x[k], pixel_y[k], pixel_r[k], tile, tiles_x, tiles_y)
         for ty in range(y0, y1 + 1):
             for tx in range(x0, x1 + 1):
                 starts[ty * tiles_x + tx + 1] += 1
@@ -341,11 +349,7 @@ def _bin_spheres(pixel_x, pixel_y, pixel_r, tile, tiles_x, tiles_y):
     cursor = starts[:-1].copy()
     entries = np.empty(starts[-1], dtype=np.int32)
     for k in range(n):
-        x, y, r = pixel_x[k], pixel_y[k], pixel_r[k]
-        x0 = max(int(math.floor((x - r) / tile)), 0)
-        x1 = min(int(math.floor((x + r) / tile)), tiles_x - 1)
-        y0 = max(int(math.floor((y - r) / tile)), 0)
-        y1 = min(int(math.floor((y + r) / tile)), tiles_y - 1)
+        x0, x1, y0, y1 = _tile_span(pixel_x[k], pixel_y[k], pixel_r[k], tile, tiles_x, tiles_y)
         for ty in range(y0, y1 + 1):
             for tx in range(x0, x1 + 1):
                 t = ty * tiles_x + tx
