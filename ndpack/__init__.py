@@ -32,6 +32,7 @@ from .packing import Packing, RoundStats
 from .protosphere import Round, pack, pack_sizes
 from .rotation import rotation
 from .sizes import SizeDistribution, SizeReport
+from .tiled import pack_tiled
 from .shapes import *  # noqa: F403  (the shape classes, listed in shapes.__all__)
 from .shapes import __all__ as _shape_names
 from .verify import Verification, verify
@@ -43,6 +44,6 @@ __all__ = [
     "NdpackError", "OracleError", "Oracle",
     "Packing", "ParameterError", "RepairWarning", "Round", "RoundStats", "ShapeError", "Verification", "Volume",
     "ball_volume", "check_covering", "cover", "Covering", "CoverReport", "ManyResult", "pack", "pack_many",
-    "pack_sizes", "SizeDistribution",
+    "pack_tiled", "pack_sizes", "SizeDistribution",
     "SizeReport", "rotation", "verify", *_shape_names,
 ]

@@ -23,7 +23,6 @@ from __future__ import annotations
 import json
 import os
 import re
-import signal
 import sys
 import time
 from collections.abc import Mapping
@@ -34,6 +33,7 @@ from .errors import NdpackError, ParameterError
 from .io import FORMATS, check, load, save
 from .protosphere import pack
 from .shape_sources import describe, is_mesh_file, load_shape
+from .workers import Workers
 
 #: The manifest's name inside ``out``.
 MANIFEST = "manifest.json"
@@ -153,8 +153,6 @@ def pack_many(sources, n: int = 1000, *, out=None, format: str = "npz", client=N
     if "progress" in pack_options or "on_round" in pack_options:
         raise ParameterError("pack_many shows its own progress over parts, and a part's on_round callback cannot "
                              "travel to a worker: leave progress= and on_round= out of the pack options")
-    if workers is not None and (not isinstance(workers, int) or workers < 1):
-        raise ParameterError(f"workers must be a positive integer, got {workers!r}")
     if format not in FORMATS:
         raise ParameterError(f"unknown format {format!r}: one of {', '.join(FORMATS)}")
     suffix = FORMATS[format].suffixes[0]
@@ -189,14 +187,14 @@ def pack_many(sources, n: int = 1000, *, out=None, format: str = "npz", client=N
     bar = tqdm(total=len(parts), initial=len(parts) - len(todo), unit="part", disable=not show, dynamic_ncols=True)
     if folder is not None:
         _write_manifest(folder / MANIFEST, parts, format)  # the plan, before any part: an early Ctrl-C keeps it
-    processes = min(workers or os.cpu_count() or 1, len(tasks))  # no idle workers to start
+    interrupted = False
     try:
-        if client is not None:
-            interrupted = _on_dask(client, tasks, finished, bar)
-        elif processes <= 1:
-            interrupted = _here(tasks, finished, bar)
-        else:
-            interrupted = _on_pool(processes, tasks, finished, bar)
+        with Workers(workers, client, most=len(tasks)) as pool:
+            for i, result, error in pool.run(_pack_one, tasks):
+                finished(i, *(result if error is None else (_failure(error), None)))
+                bar.update()
+    except KeyboardInterrupt:  # the pool is stopped; what finished is kept
+        interrupted = True
     finally:
         bar.close()
     packings = {part["name"]: packings.get(part["name"]) for part in parts  # in the order of sources
@@ -220,8 +218,8 @@ class _Task:
     sign: str | None = None
 
 
-def _pack_one(task: _Task) -> tuple[dict, object]:
-    """Pack one part (in a worker): its record's new fields, and the packing where it is not
+def _pack_one(_shared, task: _Task) -> tuple[dict, object]:
+    """Pack one part (in a worker; nothing is shared): its record's new fields, and the packing where it is not
     written (else None). Any error becomes the record's one-line ``error``."""
     started = time.perf_counter()
     try:
@@ -264,90 +262,6 @@ def _failure(error: BaseException, seconds: float | None = None) -> dict:
 def _finite(value: float) -> float | None:
     """A fill for JSON: None where unknown (NaN)."""
     return float(value) if value == value else None
-
-
-# ------------------------------------------------------------------------------------------ engines
-def _here(tasks: dict, finished, bar) -> bool:
-    """Each part in this process, in order. Returns whether Ctrl-C stopped the run."""
-    for i, task in tasks.items():
-        try:
-            record, packing = _pack_one(task)
-        except KeyboardInterrupt:
-            return True
-        finished(i, record, packing)
-        bar.update()
-    return False
-
-
-def _start_worker(threads: int) -> None:
-    """A pool worker leaves Ctrl-C to the caller, which stops the pool (no traceback per worker),
-    and takes its share of the cores for Numba's parallel loops: ``workers`` processes of a
-    thread per core each would oversubscribe the machine ``workers`` times. A
-    ``NUMBA_NUM_THREADS`` set by the user is kept."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    os.environ.setdefault("NUMBA_NUM_THREADS", str(threads))  # read when numba is first imported: later
-
-
-def _on_pool(workers: int, tasks: dict, finished, bar) -> bool:
-    """The parts on a local ``spawn`` process pool. Returns whether Ctrl-C stopped the run."""
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-    from concurrent.futures.process import BrokenProcessPool
-
-    threads = max(1, (os.cpu_count() or 1) // workers)
-    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"), initializer=_start_worker,
-                               initargs=(threads,))
-    futures = {}
-    try:
-        futures = {pool.submit(_pack_one, task): i for i, task in tasks.items()}
-        for future in as_completed(futures):
-            try:
-                record, packing = future.result()
-            except BrokenProcessPool as error:
-                record, packing = _failure(BrokenProcessPool(
-                    f"a worker process died ({error}); in a script, call pack_many under "
-                    f"`if __name__ == \"__main__\":` (the workers import it again), or pass workers=1")), None
-            except Exception as error:  # noqa: BLE001 - a result that could not travel back, reported
-                record, packing = _failure(error), None
-            finished(futures[future], record, packing)
-            bar.update()
-    except KeyboardInterrupt:
-        _stop(pool)
-        return True
-    pool.shutdown(wait=True)
-    return False
-
-
-def _stop(pool) -> None:
-    """Stop a process pool now: drop the parts not started and end the workers (their parts are
-    not written: a file is renamed into place only when complete)."""
-    # No public way to end the workers before Python 3.14; taken before shutdown, which forgets them.
-    processes = list((getattr(pool, "_processes", None) or {}).values())
-    pool.shutdown(wait=False, cancel_futures=True)
-    for process in processes:
-        process.terminate()
-    for process in processes:
-        process.join(5)
-
-
-def _on_dask(client, tasks: dict, finished, bar) -> bool:
-    """The parts on a Dask cluster. Returns whether Ctrl-C stopped the run."""
-    from distributed import as_completed
-
-    futures = {}
-    try:
-        futures = {client.submit(_pack_one, task, pure=False): i for i, task in tasks.items()}
-        for future in as_completed(futures):
-            try:
-                record, packing = future.result()
-            except Exception as error:  # noqa: BLE001 - a worker lost or a result that failed to travel
-                record, packing = _failure(error), None
-            finished(futures[future], record, packing)
-            bar.update()
-    except KeyboardInterrupt:
-        client.cancel(list(futures))
-        return True
-    return False
 
 
 # --------------------------------------------------------------------------- names, folder, manifest

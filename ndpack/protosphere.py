@@ -41,7 +41,7 @@ from .shapes.adapters import as_oracle
 from .shapes.mesh import recorded_holes
 from .shapes.plugin import check_plugin_slopes
 from .sizes import SizeDistribution
-from .verify import verify
+from .verify import DEFAULT_TOLERANCE, overlapping_pairs, verify
 
 #: Grid cells over the bounds when ``grid`` is not given (32^3 in 3D, 181^2 in 2D).
 DEFAULT_CELLS = 32_768
@@ -221,7 +221,7 @@ class RunState:
     """
 
     def __init__(self, shape, backend, counts, steps, polish_steps, restarts, key, deadline=None, budget=None,
-                 centers_in=None):
+                 centers_in=None, obstacles=None):
         self.shape = shape
         # time.perf_counter() at which the run's time budget (seconds, for sizing pieces) runs out
         self.deadline, self.budget = deadline, budget
@@ -255,10 +255,13 @@ class RunState:
         if self.period is not None:
             self.image_reach = 0.5 * self.period.shortest - self.margin
             self._obstacles = (np.empty((64, self.dim)), np.empty(64), 0)
-        self._place_prototypes(counts)
+        if obstacles is not None and len(obstacles[1]):
+            # Spheres in place from the start (pack's obstacles): neither counted nor returned.
+            self.insert(*obstacles, -1, counted=False)
+        self._place_prototypes(counts, self.obstacles if self.count else None)
 
     # ------------------------------------------------------------------ prototypes
-    def _place_prototypes(self, counts):
+    def _place_prototypes(self, counts, obstacles=None):
         lower = self.shape.bounds[0]
         cell_size = (self.shape.bounds[1] - lower) / counts
         total = int(np.prod(counts))
@@ -305,9 +308,18 @@ class RunState:
                 f"first points were found by a search, in {int(alive.sum()):,} cells; spheres may come out well "
                 "below the largest that fit: pass a finer grid= if it fits in memory", GridWarning, stacklevel=4)
         cells = {name: value[alive] for name, value in cells.items()}
+        centers, radii, table = self.centers[:0], self.radii[:0], no_spheres[alive]
+        points = points[alive]
+        if obstacles is not None and len(obstacles[1]):
+            # Spheres in place from the start: each cell starts at its best point among them (its
+            # starts and the point found so far) and converges once, clear of them.
+            centers, radii = obstacles
+            table, cells["reach"] = self.backend.near_spheres(cells["lower"], cells["upper"], cells["reach"], centers,
+                                                              radii, return_bound=True)
+            candidates = np.concatenate([starts[:, alive], points[None]])
+            points, _ = best_starts(self.backend, self.shape, candidates, centers, radii, table)
         points, clearance = self.backend.converge(
-            self.shape, points[alive], cells["lower"], cells["upper"],
-            self.centers[:0], self.radii[:0], no_spheres[alive], self.steps, cells["wall"],
+            self.shape, points, cells["lower"], cells["upper"], centers, radii, table, self.steps, cells["wall"],
         )
         # From here on the prototypes and their cells live in the store, maybe on a GPU.
         self.prototypes = self.backend.prototypes(
@@ -517,11 +529,12 @@ class RunState:
         self.reconverge(dead, tries=REVIVE_TRIES, chunk=REVIVE_CHUNK)
         return int(np.count_nonzero(self.prototypes.gather(dead)[1] > self.margin))
 
-    def insert(self, centers, radii, round_index):
+    def insert(self, centers, radii, round_index, counted=True):
         """Add a round's spheres ``centers`` (k, d), ``radii`` (k,); in a periodic domain their
         centres wrapped into the cell, the reach of the images narrowed to the round's size
         (:data:`IMAGE_REACH`) and their images within it added to the obstacles. Returns which
-        count (k,) bool: all, but with ``centers_in`` those whose centre lies in it."""
+        count (k,) bool: all, but with ``centers_in`` those whose centre lies in it, and none
+        where ``counted`` is False (pack's ``obstacles``)."""
         if self.period is not None and len(radii):
             centers = self.period.wrap(centers)
             self.image_reach = min(self.image_reach, IMAGE_REACH * float(np.max(radii)))
@@ -533,8 +546,8 @@ class RunState:
             self.radii = np.resize(self.radii, capacity)
             self.rounds = np.resize(self.rounds, capacity)
             self.inside = np.resize(self.inside, capacity)
-        inside = np.ones(len(radii), dtype=bool)
-        if self.centers_in is not None and len(radii):
+        inside = np.full(len(radii), counted)
+        if counted and self.centers_in is not None and len(radii):
             inside = self.centers_in._distance(np.asarray(centers, dtype=np.float64)) < 0
         self.centers[self.count:needed] = centers
         self.radii[self.count:needed] = radii
@@ -576,6 +589,7 @@ def pack(
     on_invalid: str | None = None,
     on_round=None,
     centers_only: bool = False,
+    obstacles=None,
 ) -> Packing:
     """Fill ``shape`` with non-overlapping spheres, largest first (ProtoSphere).
 
@@ -646,6 +660,12 @@ def pack(
         and the spheres whose centres lie in ``shape`` count and are returned (the others were
         obstacles, as in a larger packing cut by centre). ``params["centers_only"]`` says so,
         and verification checks the centres.
+    obstacles : Packing or (centers (m, d), radii (m,)), optional
+        Spheres already in place (fixed particles, a packing to go on from, the neighbours of a
+        tile: :func:`ndpack.pack_tiled`): the new spheres keep clear of them and fill the gaps
+        they leave; they are neither counted in ``n`` nor returned, and may reach outside the
+        shape. ``params["obstacles"]`` records how many there were, and the final check finds
+        any new sphere that overlaps one.
 
     Returns
     -------
@@ -674,6 +694,7 @@ def pack(
             f"within {FAST_WINDOW:.0%} of the largest a round; drop batch or use mode='faithful'"
         )
     on_invalid = _check_run(shape, on_invalid, on_round)
+    obstacles = _check_obstacles(obstacles, shape.dim)
     packed = _centers_only(shape, max_radius, "max_radius") if centers_only else shape
     backend = get_backend(backend, device=device, shape=packed)
     counts = grid_counts(packed.bounds, grid)
@@ -685,6 +706,8 @@ def pack(
     )
     if mode_why:
         params["mode_why"] = mode_why
+    if obstacles is not None:
+        params["obstacles"] = len(obstacles[1])
     if mode == "fast":
         params.update(fast_eps_end=FAST_EPS_END, fast_polish_eps_end=FAST_POLISH_EPS_END, polish_ahead=polish_ahead)
 
@@ -694,7 +717,28 @@ def pack(
     return run(packed, backend, strategy, counts=counts, mode=mode, iterations=iterations, restarts=restarts,
                seed=seed, n=n, radius_range=(float(min_radius), max_radius), fill=fill, time_budget=time_budget,
                progress=progress, on_invalid=on_invalid, on_round=on_round, params=params,
-               centers_in=shape if centers_only else None)[0]
+               centers_in=shape if centers_only else None, obstacles=obstacles)[0]
+
+
+def _check_obstacles(obstacles, dim: int):
+    """``pack``'s ``obstacles`` as centres (m, d) and radii (m,) float64, or None for none."""
+    if obstacles is None:
+        return None
+    if hasattr(obstacles, "centers") and hasattr(obstacles, "radii"):
+        obstacles = (obstacles.centers, obstacles.radii)
+    try:
+        centers, radii = obstacles
+        centers = np.asarray(centers, dtype=np.float64).reshape(-1, dim) if len(radii) else np.empty((0, dim))
+        radii = np.asarray(radii, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ParameterError(f"obstacles must be a Packing or (centers (m, {dim}), radii (m,)), got "
+                             f"{type(obstacles).__name__}") from None
+    if radii.ndim != 1 or len(centers) != len(radii):
+        raise ParameterError(f"obstacles: {len(centers)} centres but radii of shape {radii.shape}; give one radius "
+                             "per centre")
+    if not (np.all(np.isfinite(centers)) and np.all(np.isfinite(radii)) and np.all(radii > 0)):
+        raise ParameterError("obstacles: every centre must be finite and every radius positive and finite")
+    return centers, radii
 
 
 def choose_mode(mode: str, n, dim: int, batch) -> tuple[str, str | None]:
@@ -868,19 +912,20 @@ def pack_sizes(
 
 
 def run(shape, backend, strategy, *, counts, mode, iterations, restarts, seed, n, radius_range, fill, time_budget,
-        progress, on_invalid, on_round, params, centers_in=None):
+        progress, on_invalid, on_round, params, centers_in=None, obstacles=None):
     """One packing run of a driver whose parameters are checked: places the prototypes, runs
     the rounds of ``strategy(state)`` (a round strategy of :mod:`ndpack.rounds`, made over
     the run's :class:`RunState`) until a limit, and returns the packing, verified in float64,
     and the strategy (what it kept of the run). ``radius_range`` is ``(min_radius,
     max_radius)``; ``params`` are recorded in the packing. With ``centers_in`` (the user's shape,
     ``shape`` being it grown by the largest radius: :func:`_centers_only`) only the spheres whose
-    centres lie in it count and are returned, verified by their centres."""
+    centres lie in it count and are returned, verified by their centres. ``obstacles`` (centres
+    (m, d), radii (m,), or None) are spheres in place from the start."""
     started = time.perf_counter()
     steps, polish_steps = schedules(mode, int(iterations))
     deadline = None if time_budget is None else started + time_budget
     state = RunState(shape, backend, counts, steps, polish_steps, int(restarts), run_key(np.random.default_rng(seed)),
-                     deadline, time_budget, centers_in)
+                     deadline, time_budget, centers_in, obstacles)
     shape = shape if centers_in is None else centers_in
     volume = shape.volume()
     if not volume.value > 0:
@@ -915,7 +960,11 @@ def run(shape, backend, strategy, *, counts, mode, iterations, restarts, seed, n
         stop_reason=stop_reason,
         shape=shape,
     )
-    return _ensure_valid(packing, shape, state.margin, getattr(backend, "precision", "float64"), on_invalid), strategy
+    precision = getattr(backend, "precision", "float64")
+    packing = _ensure_valid(packing, shape, state.margin, precision, on_invalid)
+    if obstacles is not None:
+        packing = _clear_of(packing, obstacles, state.margin, precision, on_invalid)
+    return packing, strategy
 
 
 @dataclass(frozen=True)
@@ -990,6 +1039,41 @@ def _on_invalid(value: str | None) -> str:
     if value not in ("repair", "raise"):
         raise ParameterError(f"{where} must be 'repair' or 'raise', got {value!r}")
     return value
+
+
+def _clear_of(packing: Packing, obstacles, margin: float, precision: str, on_invalid: str) -> Packing:
+    """The packing, checked in float64 against ``obstacles`` (centres (m, d), radii (m,)): a new
+    sphere that overlaps one is shrunk to clear it by ``margin`` (or dropped), as
+    :func:`_ensure_valid` repairs, or raises with ``on_invalid="raise"``."""
+    centers, radii = obstacles
+    if len(packing) == 0 or len(radii) == 0:
+        return packing
+    count = len(radii)
+    tol = DEFAULT_TOLERANCE * packing.shape.scale if packing.shape is not None else 0.0
+    pairs, _ = overlapping_pairs(np.concatenate([centers, packing.centers]), np.concatenate([radii, packing.radii]),
+                                 tol, period_of(packing.shape))
+    pairs = pairs[(pairs[:, 0] < count) & (pairs[:, 1] >= count)]  # obstacle, new sphere
+    if len(pairs) == 0:
+        return packing
+    found = f"{len(np.unique(pairs[:, 1]))} new sphere(s) overlapped the obstacles given"
+    cause = (f"the {precision} backend's rounding exceeded its safety margin" if precision != "float64"
+             else "the backend computed clearances wrongly")
+    if on_invalid == "raise":
+        raise InvalidPackingError(f"the packing failed its final check: {found}; {cause}. {KEPT_IN_ERROR}",
+                                  packing=packing)
+    new_radii = packing.radii.copy()
+    period = period_of(packing.shape)
+    for obstacle, index in pairs:
+        new = index - count
+        delta = packing.centers[new] - centers[obstacle]
+        if period is not None:
+            delta = period.difference(packing.centers[new][None], centers[obstacle][None])[0]
+        new_radii[new] = min(new_radii[new], np.linalg.norm(delta) - radii[obstacle] - margin)
+    keep = new_radii > 0
+    warnings.warn(f"{found}; they were shrunk or dropped: {cause}", RepairWarning, stacklevel=3)
+    repaired = packing.replace_spheres(packing.centers[keep], new_radii[keep], packing.rounds[keep])
+    repaired.repair = {**(packing.repair or {}), "obstacle_overlaps": int(len(pairs)), "cause": cause}
+    return repaired
 
 
 def _ensure_valid(packing: Packing, shape: Oracle, margin: float, precision: str = "float64",

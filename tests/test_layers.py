@@ -17,7 +17,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "ndpack"
 #: Bottom to top: a module may import from its own layer or any layer below it.
 LAYERS = (
     ("base", ("ndpack.errors", "ndpack.log", "ndpack.period", "ndpack.rotation", "ndpack.conflicts",
-              "ndpack.ball_union")),
+              "ndpack.ball_union", "ndpack.workers")),
     # The scalar-kernel language, programs, the tape, the library, compiling, compiled_program.
     ("kernels", ("ndpack.kernels",)),
     ("meshes", ("ndpack.meshes",)),
@@ -25,7 +25,7 @@ LAYERS = (
     ("backends", ("ndpack.backends",)),
     ("driver", ("ndpack.protosphere", "ndpack.rounds", "ndpack.consistency", "ndpack.verify", "ndpack.sizes",
                 "ndpack.boundary", "ndpack.inside_cells", "ndpack.covering", "ndpack.sphere_tree",
-                "ndpack.packing")),
+                "ndpack.packing", "ndpack.tiled")),
     # Files, pictures, robots, named shapes and shape sources: ndpack and the world outside.
     ("outside", ("ndpack.io", "ndpack.pictures", "ndpack.robots", "ndpack.named_shapes", "ndpack.shape_sources",
                  "ndpack.samples", "ndpack.many")),
