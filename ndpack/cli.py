@@ -29,6 +29,7 @@ PACK_EXAMPLES = """examples:
   ndpack pack box:dim=3 -n 100000 --backend warp --device cuda:0 -o cube.npz
   ndpack pack cow.obj -n 3000 -o cow.json --format curobo --option link=cow
   ndpack pack parts/*.stl -n 5000 -o out/       # many parts, on every core: out/<part>.npz, out/manifest.json
+  ndpack pack box:dim=3 -n 2000000 --tiles auto -o big.npz   # one domain in tiles, on every core
 
 SHAPE is a built-in name[:key=value,...], a mesh file (.obj .stl .ply .off .glb ...), a Python
 script (.py) that sets `shape`, or module:function. Built-in shapes: {shapes}.
@@ -243,8 +244,13 @@ def _parser() -> argparse.ArgumentParser:
     pack.add_argument("--on-invalid", choices=("repair", "raise"),
                       help="should the final float64 check fail: repair (shrink or drop the spheres, and "
                       "say so; the default) or raise (exit 2, nothing saved)")
+    pack.add_argument("--tiles", type=_tiles, metavar="auto|N|N,N,...",
+                      help="pack one shape in tiles on --workers processes (ndpack.pack_tiled): a global phase "
+                      "for the large spheres, then the tiles in bands of radius; auto: 4 slabs per worker "
+                      "across the longest side, N: N tiles along each axis, N,N,...: per axis")
     pack.add_argument("--workers", type=_positive_int,
-                      help="several shapes: parts packed at once, each in its own process (default: all cores)")
+                      help="several shapes: parts packed at once, each in its own process; --tiles: the processes "
+                      "that pack the tiles (default: all cores)")
     pack.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
 
     cover = commands.add_parser("cover", help="cover a shape, or each link of a robot (URDF), with spheres",
@@ -369,25 +375,15 @@ def _pack(args) -> int:
     elif options or args.format:
         raise ParameterError("--format and --option describe the output file: give it with -o PATH")
     started = time.perf_counter()
-    packing = _pack_keeping_invalid(
-        pack, args.output,
-        shape,
-        n=args.count,
-        min_radius=args.min_radius,
-        max_radius=args.max_radius,
-        fill=args.fill,
-        time_budget=args.time_budget,
-        grid=args.grid,
-        iterations=args.iterations,
-        batch=args.batch,
-        mode=args.mode,
-        seed=args.seed,
-        backend=args.backend,
-        device=args.device,
-        progress=not args.quiet and sys.stderr.isatty(),
-        on_invalid=args.on_invalid,
-        centers_only=args.centers_only,
-    )
+    common = dict(n=args.count, min_radius=args.min_radius, grid=args.grid, iterations=args.iterations,
+                  mode=args.mode, seed=args.seed, backend=args.backend, device=args.device,
+                  progress=not args.quiet and sys.stderr.isatty(), on_invalid=args.on_invalid)
+    if args.tiles is not None:
+        packing = _pack_keeping_invalid(_pack_tiled(args), args.output, shape, **common)
+    else:
+        packing = _pack_keeping_invalid(pack, args.output, shape, max_radius=args.max_radius, fill=args.fill,
+                                        time_budget=args.time_budget, batch=args.batch,
+                                        centers_only=args.centers_only, **common)
     elapsed = time.perf_counter() - started
     packing.params["source"] = describe(source)
     if args.sign is not None:  # verify and render reload the mesh the same way
@@ -402,6 +398,11 @@ def _pack(args) -> int:
               f"ball with a hole: annulus:dim={shape.dim}")
     print(f"fill:     {packing.fill:.4f}{_plus_minus(packing.fill_error) if packing.volume_error else ''}")
     print(f"verified: {report.summary()}")
+    tiled = packing.params.get("tiled")
+    if tiled:
+        print(f"tiles:    {' x '.join(map(str, tiled['tiles']))} on {tiled['workers']} workers; "
+              f"{tiled['global_spheres']} spheres in the global phase ({tiled['global_seconds']:.2f} s), the rest in "
+              f"{len(tiled['bands'])} bands ({tiled['phase_seconds']:.2f} s, workers busy {tiled['busy_share']:.0%})")
     if packing.repair:
         print(f"REPAIRED: {repair_summary(packing.repair)}")
     if args.output:
@@ -420,6 +421,36 @@ def _pack(args) -> int:
 
 #: The suffixes of the mesh files a folder given to ``ndpack pack`` stands for (those trimesh reads).
 FOLDER_MESH_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".3mf")
+
+
+def _tiles(text: str):
+    """``--tiles``: auto (None), N, or N,N,... (per axis)."""
+    if text == "auto":
+        return "auto"
+    try:
+        counts = [int(part) for part in text.split(",")]
+    except ValueError:
+        counts = []
+    if not counts or min(counts) < 1:
+        raise argparse.ArgumentTypeError(f"give auto, a positive integer, or one per axis (4,2,2), not {text!r}")
+    return counts[0] if len(counts) == 1 else counts
+
+
+def _pack_tiled(args):
+    """``nd.pack_tiled`` with ``--tiles`` and ``--workers``, after refusing the options it does not take."""
+    from .tiled import pack_tiled
+
+    refused = [name for name, given in (("--max-radius", args.max_radius is not None), ("--fill", args.fill),
+                                        ("--time", args.time_budget), ("--batch", args.batch != 1),
+                                        ("--centers-only", args.centers_only)) if given]
+    if refused:
+        raise ParameterError(f"--tiles packs to a count (-n) or --min-radius; it does not take {', '.join(refused)}: "
+                             "leave them out, or leave out --tiles")
+
+    def tiled(shape, **options):
+        return pack_tiled(shape, tiles=None if args.tiles == "auto" else args.tiles, workers=args.workers, **options)
+
+    return tiled
 
 
 def _with_dim(spec: str, dim: int | None) -> str:

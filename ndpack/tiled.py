@@ -399,7 +399,7 @@ class _TiledRun:
         """The tiles of one colour pack their grown boxes from ``high`` down to ``low``, at once."""
         phase = band_index * 2 ** self.shape.dim + colour
         options = dict(self.options)
-        if "grid" not in options:  # cells as the fast mode splits them for the band's largest gaps
+        if options.get("grid") is None:  # cells as the fast mode splits them for the band's largest gaps
             side = float(np.max(self.tiling.size)) + 2 * self.tiling.halo
             options["grid"] = int(np.clip(round(side / (SPLIT_RATIO * high)), 2, MAX_TILE_GRID))
         tasks = {}
@@ -416,6 +416,8 @@ class _TiledRun:
         phase_started = time.perf_counter()
         for tile, result, error in self.pool.run(_pack_tile, tasks):
             if error is not None:
+                error.add_note(f"(in tile {tile} of {self.tiling.total}, box {self.tiling.grown_box(tile)[0]} to "
+                               f"{self.tiling.grown_box(tile)[1]}, band {band_index + 1}, down to radius {low:.4g})")
                 raise error
             self.spheres.add(tile, result["centers"], result["radii"], phase)
             self.task_seconds += result["seconds"]

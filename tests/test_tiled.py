@@ -146,3 +146,20 @@ def test_a_periodic_axis_needs_an_even_number_of_tiles():
         nd.pack_tiled(nd.Periodic(nd.Box([0, 0], [1, 1])), n=100, tiles=[3, 2], workers=1)
     with pytest.raises(ParameterError, match="periodic box"):
         nd.pack_tiled(nd.Periodic(nd.Ball([0, 0], 1.0)), n=100, workers=1)
+
+
+def test_the_command_line_packs_one_shape_in_tiles(tmp_path, capsys):
+    from ndpack.cli import main
+
+    out = tmp_path / "square.npz"
+    assert main(["pack", "box:dim=2", "-n", "400", "--tiles", "4", "--workers", "1", "-q", "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "tiles:    4 x 4 on 1 workers;" in printed and "spheres:  400 (the count asked for)" in printed
+    packing = nd.Packing.load(out)
+    assert len(packing) == 400 and packing.params["tiled"]["tiles"] == [4, 4]
+    assert main(["verify", str(out)]) == 0
+    assert main(["pack", "box:dim=2", "-n", "400", "--tiles", "auto", "--fill", "0.5", "-q"]) == 2
+    assert "it does not take --fill" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["pack", "box:dim=2", "--tiles", "0,2"])
+    assert "give auto, a positive integer" in capsys.readouterr().err
