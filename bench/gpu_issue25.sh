@@ -13,7 +13,7 @@ COUNT=${COUNT:-1000000}
 BIG=${BIG:-10000000}
 case "$STEP" in
   cpu)
-    NDPACK_BACKEND=numba timeout 150 python3 bench/many_parts.py --workers 1 2 4 8 16 --count 2000 \
+    NDPACK_BACKEND=numba timeout 150 python3 bench/many_parts.py --workers 1 2 4 8 16 --count 2000 --no-meshes \
       --out "$OUT/many_parts_h100.json" 2>&1 | grep -v "^Warp\|^Module"
     timeout -s INT -k 30 380 python3 bench/tiled.py --count "$COUNT" --workers 16 4 --backend numba \
       --out "$OUT/tiled_h100_numba.json" 2>&1 | grep -v "^Warp\|^Module"

@@ -29,11 +29,15 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--count", type=int, default=2000)
+    parser.add_argument("--no-meshes", action="store_true",
+                        help="built-in shapes only (three more in place of the meshes): for a machine without trimesh")
     parser.add_argument("--out", type=Path, default=Path("bench/results/many_parts_2core.json"))
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
-        meshes = [str(path) for path in ndpack.samples.write(folder, robot=False)]
-        sources = meshes + SPECS
+        if args.no_meshes:
+            sources = SPECS + ["ball:dim=2", "box:dim=4", "annulus:dim=3"]
+        else:
+            sources = [str(path) for path in ndpack.samples.write(folder, robot=False)] + SPECS
         nd.pack_many(sources, n=50, workers=1)  # compile every kernel once, into the on-disk cache
         rows = []
         for workers in args.workers:
