@@ -35,7 +35,9 @@ def main():
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
         if args.no_meshes:
-            sources = SPECS + ["ball:dim=2", "box:dim=4", "annulus:dim=3"]
+            # annulus:dim=2 is cut by manifold3d, which that machine lacks too.
+            sources = [spec for spec in SPECS if spec != "annulus:dim=2"] + ["simplex:dim=2", "box:dim=4",
+                                                                              "annulus:dim=3,inner=0.3", "torus"]
         else:
             sources = [str(path) for path in ndpack.samples.write(folder, robot=False)] + SPECS
         nd.pack_many(sources, n=50, workers=1)  # compile every kernel once, into the on-disk cache

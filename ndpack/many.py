@@ -104,7 +104,7 @@ class ManyResult:
 
 
 def pack_many(sources, n: int = 1000, *, out=None, format: str = "npz", client=None, workers: int | None = None,
-              progress: bool | None = None, holes: str | None = None, sign: str | None = None,
+              gpus=None, progress: bool | None = None, holes: str | None = None, sign: str | None = None,
               **pack_options) -> ManyResult:
     """Pack each of ``sources`` with :func:`ndpack.pack`, in parallel; a failing part does not stop the others.
 
@@ -130,6 +130,9 @@ def pack_many(sources, n: int = 1000, *, out=None, format: str = "npz", client=N
     workers : int, optional
         The local pool's processes (default: ``os.cpu_count()``); 1 runs the parts here, one by
         one, with no pool (for debugging). Ignored with ``client``.
+    gpus : sequence of int, optional
+        Spread the local workers over these GPUs in turn, each seeing one as ``cuda:0`` (pass
+        ``device="cuda:0"`` and a GPU backend).
     progress : bool, optional
         A progress bar over the parts; by default only when stderr is a terminal.
     holes, sign : str, optional
@@ -189,7 +192,7 @@ def pack_many(sources, n: int = 1000, *, out=None, format: str = "npz", client=N
         _write_manifest(folder / MANIFEST, parts, format)  # the plan, before any part: an early Ctrl-C keeps it
     interrupted = False
     try:
-        with Workers(workers, client, most=len(tasks)) as pool:
+        with Workers(workers, client, most=len(tasks), gpus=gpus) as pool:
             for i, result, error in pool.run(_pack_one, tasks):
                 finished(i, *(result if error is None else (_failure(error), None)))
                 bar.update()

@@ -252,7 +252,7 @@ class _Spheres:
 
 
 def pack_tiled(shape, n: int = 100_000, *, tiles=None, workers: int | None = None, client=None,
-               band: float = BAND, min_radius: float = 0.0, seed: int = 0, progress: bool | None = None,
+               gpus=None, band: float = BAND, min_radius: float = 0.0, seed: int = 0, progress: bool | None = None,
                on_invalid: str | None = None, **pack_options) -> Packing:
     """Fill ``shape`` with ``n`` spheres, largest first, the small ones tile by tile on several workers.
 
@@ -274,7 +274,12 @@ def pack_tiled(shape, n: int = 100_000, *, tiles=None, workers: int | None = Non
         Local processes (default ``os.cpu_count()``; 1 runs the tiles here, one by one).
         Ignored with ``client``.
     client : dask.distributed.Client, optional
-        Run the tiles on this Dask cluster.
+        Run the tiles on this Dask cluster (dask-cuda's ``LocalCUDACluster`` for a worker per
+        GPU, with ``device="cuda:0"``: each worker sees its own GPU as the first).
+    gpus : sequence of int, optional
+        Spread the local workers over these GPUs in turn, each seeing one as ``cuda:0`` (pass
+        ``device="cuda:0"``); several workers may share a GPU (``workers=8, gpus=[0]``: on an
+        H100, 8 processes packed 10M spheres 2.2x sooner than one run; docs/tiled.md).
     band : float
         Each band's smallest radius as a share of its largest, in (0, 1).
     min_radius : float
@@ -315,7 +320,7 @@ def pack_tiled(shape, n: int = 100_000, *, tiles=None, workers: int | None = Non
     show = sys.stderr.isatty() if progress is None else progress
     bar = tqdm(total=int(n), unit="sphere", disable=not show, dynamic_ncols=True)
     try:
-        with Workers(workers, client, shared=shape) as pool:
+        with Workers(workers, client, shared=shape, gpus=gpus) as pool:
             tiling = make_tiling(shape.bounds, tiles, pool.count, period)
             first = pack(shape, n=n, min_radius=max(min_radius, tiling.halo), seed=seed, progress=False,
                          on_invalid=on_invalid, on_round=lambda step: bar.update(len(step.radii)), **pack_options)

@@ -39,18 +39,29 @@ class Workers:
         Passed as the first argument of every task's function; sent to each worker once.
     most : int, optional
         No more local processes than this (the number of tasks there will be, so that none idles).
+    gpus : sequence of int, optional
+        Spread the local processes over these GPUs, in turn: each sees one of them, as ``cuda:0``
+        (``CUDA_VISIBLE_DEVICES``), as dask-cuda gives each of its workers one GPU.
     """
 
-    def __init__(self, workers: int | None = None, client=None, shared=None, most: int | None = None):
+    def __init__(self, workers: int | None = None, client=None, shared=None, most: int | None = None,
+                 gpus=None):
         if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
             raise ParameterError(f"workers must be a positive integer, got {workers!r}")
+        if gpus is not None:
+            gpus = list(gpus)
+            if not gpus or not all(isinstance(g, int) and not isinstance(g, bool) and g >= 0 for g in gpus):
+                raise ParameterError(f"gpus must be GPU numbers (integers >= 0), such as [0, 1], got {gpus!r}")
+            if client is not None:
+                raise ParameterError("gpus= spreads local processes over GPUs; on Dask, start a worker per GPU "
+                                     "(dask-cuda's LocalCUDACluster) instead")
         self.client, self.shared = client, shared
         self.processes = 1 if client is not None else max(1, min(workers or os.cpu_count() or 1, most or 1 << 30))
         self._pool = self._shared_future = None
         if client is not None and shared is not None:
             self._shared_future = client.scatter(shared, broadcast=True)
-        elif self.processes > 1:
-            self._pool = _start_pool(self.processes, shared)
+        elif self.processes > 1 or gpus:
+            self._pool = _start_pool(self.processes, shared, gpus)
 
     @property
     def count(self) -> int:
@@ -136,24 +147,32 @@ class Workers:
             self.close()
 
 
-def _start_pool(processes: int, shared):
+def _start_pool(processes: int, shared, gpus=None):
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
+    context = multiprocessing.get_context("spawn")
     threads = max(1, (os.cpu_count() or 1) // processes)
-    return ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context("spawn"), initializer=_start_worker,
-                               initargs=(threads, shared))
+    started = context.Value("i", 0)  # which worker this is, for its GPU
+    return ProcessPoolExecutor(processes, mp_context=context, initializer=_start_worker,
+                               initargs=(threads, shared, gpus, started))
 
 
-def _start_worker(threads: int, shared) -> None:
+def _start_worker(threads: int, shared, gpus=None, started=None) -> None:
     """A pool worker keeps what is shared, leaves Ctrl-C to the caller, which stops the pool (no
-    traceback per worker), and takes its share of the cores for Numba's parallel loops:
-    ``workers`` processes of a thread per core each would oversubscribe the machine ``workers``
-    times. A ``NUMBA_NUM_THREADS`` set by the user is kept."""
+    traceback per worker), takes its share of the cores for Numba's parallel loops (``workers``
+    processes of a thread per core each would oversubscribe the machine ``workers`` times; a
+    ``NUMBA_NUM_THREADS`` set by the user is kept) and, with ``gpus``, the next GPU in turn as
+    its only one (set before anything in it starts CUDA)."""
     global _SHARED
     _SHARED = shared
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     os.environ.setdefault("NUMBA_NUM_THREADS", str(threads))  # read when numba is first imported: later
+    if gpus:
+        with started.get_lock():
+            turn = started.value
+            started.value += 1
+        os.environ["CUDA_VISIBLE_DEVICES"] = str(gpus[turn % len(gpus)])
 
 
 def _call(function, task):
