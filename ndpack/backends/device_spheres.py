@@ -1,12 +1,15 @@
 """A device copy of the driver's growing sphere arrays, shared by the GPU backends.
 
 The driver only appends spheres, so each call copies up only the spheres added since the last
-one. A prefix that no longer matches (checked on its first and last sphere) starts a fresh copy.
+one. Arrays that do not extend the ones copied (other spheres: another run, another tile's
+obstacles; :func:`~ndpack.backends.sphere_index.extends`) start a fresh copy.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from .sphere_index import extends, owner
 
 
 class DeviceSpheres:
@@ -30,6 +33,7 @@ class DeviceSpheres:
         self.empty, self.write, self.keep, self.view = empty, write, keep, view
         self.count = 0
         self.first = self.last = None
+        self.buffer = None  # the owner of the host arrays mirrored (sphere_index.owner)
         self.centers = self.radii = None
         self.dim = None
         self._views = (None, None, None)  # (count, centers, radii): views cost tens of us in numba-cuda
@@ -37,11 +41,9 @@ class DeviceSpheres:
     def sync(self, centers: np.ndarray, radii: np.ndarray):
         """Device views equal to ``centers`` (m, d) float64 and ``radii`` (m,) float64."""
         count, dim = centers.shape
-        same_prefix = (
-            self.centers is not None and dim == self.dim and count >= self.count
-            and (self.count == 0 or (np.array_equal(centers[0], self.first)
-                                     and np.array_equal(centers[self.count - 1], self.last)))
-        )
+        same_prefix = (self.centers is not None and dim == self.dim
+                       and extends(centers, self.count, self.buffer, self.first, self.last))
+        self.buffer = owner(centers)
         if not same_prefix:
             self.count = 0
         if not same_prefix or count > self.capacity:

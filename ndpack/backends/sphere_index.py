@@ -28,6 +28,24 @@ from .numba_common import geometry_kernels
 LEVELS = 48
 
 
+def owner(array: np.ndarray) -> np.ndarray:
+    """The array that owns ``array``'s memory (itself, or the base of a view): the driver passes
+    views of its growing sphere buffers, so two calls on one packing share it, and a call on
+    other spheres (another run, another tile's obstacles) does not, whatever their values."""
+    while isinstance(array.base, np.ndarray):
+        array = array.base
+    return array
+
+
+def extends(centers: np.ndarray, count: int, buffer, first, last) -> bool:
+    """Whether ``centers`` (m, d) extend the ``count`` rows indexed before: views of the same
+    buffer (:func:`owner`), at least as long, with the same first and last indexed rows (a buffer
+    refilled in place would change them). The values alone are not enough: two lists of spheres
+    can share their first sphere and the one at ``count - 1`` and differ between them."""
+    return (buffer is not None and owner(centers) is buffer and len(centers) >= count
+            and (count == 0 or (np.array_equal(centers[0], first) and np.array_equal(centers[count - 1], last))))
+
+
 class SphereIndex:
     """The index over a growing prefix of the driver's sphere arrays.
 
@@ -41,6 +59,7 @@ class SphereIndex:
         self.insert = insert
         self.count = 0
         self.first = self.last = None
+        self.buffer = None  # the owner of the arrays indexed (see owner())
         self.arrays = None
 
     def _reset(self, centers, radii, capacity):
@@ -68,13 +87,11 @@ class SphereIndex:
 
     def sync(self, centers: np.ndarray, radii: np.ndarray):
         """Index ``centers`` (m, d) float64 and ``radii`` (m,) float64; only new rows are inserted
-        when the arrays extend the ones indexed before (checked on the first and last sphere)."""
+        when the arrays extend the ones indexed before (:func:`extends`)."""
         count = len(radii)
-        same_prefix = (
-            self.arrays is not None and count >= self.count and centers.shape[1] == len(self.arrays[0])
-            and (self.count == 0 or (np.array_equal(centers[0], self.first)
-                                     and np.array_equal(centers[self.count - 1], self.last)))
-        )
+        same_prefix = (self.arrays is not None and centers.shape[1] == len(self.arrays[0])
+                       and extends(centers, self.count, self.buffer, self.first, self.last))
+        self.buffer = owner(centers)
         if not same_prefix or count > self.capacity:
             self._reset(centers, radii, max(64, 2 * count))
         if count > self.count:

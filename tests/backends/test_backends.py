@@ -517,3 +517,26 @@ def test_staging_buffers_grow_by_doubling():
     assert staging_rows(0, 100_000) == 100_000
     assert staging_rows(256, 300) == 512
     assert staging_rows(256, 5000) == 5000
+
+
+@pytest.mark.parametrize("name", COMPILED)
+def test_other_spheres_with_the_same_ends_are_not_taken_for_the_last_ones(name):
+    """The sphere index and a GPU's sphere copy grow with the driver's arrays; other arrays that
+    happen to share the first sphere and the one at the old count's end (another run's, another
+    tile's obstacles) are indexed afresh, not taken as an extension (issue 25: tiles in one
+    process packed into obstacles that the stale index had lost)."""
+    backend = backends.get_backend(name)
+    first = np.array([[0.1, 0.1], [0.5, 0.9], [0.5, 0.5], [0.9, 0.1], [0.9, 0.9]])
+    other = np.concatenate([first, [[0.2, 0.8]]])
+    other[2] = [0.1, 0.9]  # same first and fifth sphere, another third one
+    radii = np.full(6, 0.05)
+    lower, upper = np.array([[0.4, 0.4], [0.0, 0.8]]), np.array([[0.6, 0.6], [0.2, 1.0]])
+    reach = np.full(2, 0.2)
+    points = np.array([[0.5, 0.5], [0.12, 0.88]])
+    for centers in (first, other):
+        table = backend.near_spheres(lower, upper, reach, centers, radii[: len(centers)])
+        np.testing.assert_array_equal(table, REFERENCE.near_spheres(lower, upper, reach, centers, radii[: len(centers)]))
+        shape = nd.Box([0.0, 0.0], [1.0, 1.0])
+        got = backend.clearance(shape, points, centers, radii[: len(centers)], table)
+        np.testing.assert_allclose(got, REFERENCE.clearance(shape, points, centers, radii[: len(centers)], table),
+                                   atol=1e-6 if name == "warp" else 1e-12)
