@@ -503,6 +503,9 @@ def _pack_many(args, shapes: list[str]) -> int:
         raise ParameterError("--option applies to one output file: pack the part alone for a format option")
     if args.periodic is not None:
         raise ParameterError("--periodic applies to one shape: pack the parts one by one to make them periodic")
+    if args.tiles is not None:
+        raise ParameterError("--tiles packs one shape in tiles; several shapes are packed each on its own: leave out "
+                             "--tiles, or give one shape")
     if not args.output and args.format:
         raise ParameterError("--format describes the output files: give the folder with -o FOLDER/")
     if args.dim is not None:  # to each built-in spec, as for one shape; a file keeps its own dimension

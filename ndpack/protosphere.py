@@ -537,7 +537,8 @@ class RunState:
         where ``counted`` is False (pack's ``obstacles``)."""
         if self.period is not None and len(radii):
             centers = self.period.wrap(centers)
-            self.image_reach = min(self.image_reach, IMAGE_REACH * float(np.max(radii)))
+            if counted:  # spheres given (obstacles) say nothing of the sizes to come
+                self.image_reach = min(self.image_reach, IMAGE_REACH * float(np.max(radii)))
             self._add_obstacles(*self.with_images(centers, radii))
         needed = self.count + len(radii)
         if needed > len(self.radii):
@@ -728,11 +729,14 @@ def _check_obstacles(obstacles, dim: int):
         obstacles = (obstacles.centers, obstacles.radii)
     try:
         centers, radii = obstacles
-        centers = np.asarray(centers, dtype=np.float64).reshape(-1, dim) if len(radii) else np.empty((0, dim))
+        centers = np.asarray(centers, dtype=np.float64) if len(radii) else np.empty((0, dim))
         radii = np.asarray(radii, dtype=np.float64)
     except (TypeError, ValueError):
         raise ParameterError(f"obstacles must be a Packing or (centers (m, {dim}), radii (m,)), got "
                              f"{type(obstacles).__name__}") from None
+    if centers.ndim != 2 or centers.shape[1] != dim:
+        raise ParameterError(f"obstacles: centres of shape {centers.shape}, but the shape is {dim}-D: give them as "
+                             f"(m, {dim})")
     if radii.ndim != 1 or len(centers) != len(radii):
         raise ParameterError(f"obstacles: {len(centers)} centres but radii of shape {radii.shape}; give one radius "
                              "per centre")

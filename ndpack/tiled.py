@@ -343,7 +343,7 @@ class _TiledRun:
         self.stop_reason = first.stop_reason
         self.global_seconds = float(first.stats.time[-1]) if len(first.stats.time) else 0.0
         self.records = []  # per band: smallest radius, spheres, seconds, tile seconds
-        self.stats = []  # per phase: seconds, count
+        self.stats = []  # per phase: seconds since the start, count, fill
         self.task_seconds = self.phase_seconds = 0.0
         self.halo_spheres = 0  # spheres a tile made with their centre outside it (in the halo)
         self.volume = shape.volume().value
@@ -354,6 +354,7 @@ class _TiledRun:
         self.live = np.flatnonzero(shape._distance(middle) < np.linalg.norm(upper - middle, axis=1))
 
     def bands(self, started):
+        self.started = started
         high, history, empty = self.first.params["min_radius"], [], 0
         history.append((high, self.spheres.count))
         try:
@@ -432,7 +433,7 @@ class _TiledRun:
             self.covered += float(ball_volume(self.shape.dim, result["radii"]).sum())
             self.bar.update(len(result["radii"]))
         self.phase_seconds += time.perf_counter() - phase_started
-        self.stats.append((phase, self.spheres.count, self.covered / self.volume))
+        self.stats.append((time.perf_counter() - self.started, self.spheres.count, self.covered / self.volume))
 
     def packing(self, started, on_invalid) -> Packing:
         """The whole packing, ``n`` spheres at most (the smallest of the last band left out),
@@ -447,10 +448,10 @@ class _TiledRun:
             keep = np.sort(np.argsort(-radii, kind="stable")[: self.n])
             centers, radii, rounds = centers[keep], radii[keep], rounds[keep]
         elapsed = time.perf_counter() - started
-        times = [float(first.stats.time[-1])] if len(first.stats.time) else []
+        times = [float(first.stats.time[-1]) if len(first.stats.time) else 0.0]
         counts, fills = [len(first)], [first.fill]
-        for _, count, fill in self.stats:
-            times.append(elapsed)  # the phases' own times are in params["tiled"]; the curve ends here
+        for seconds, count, fill in self.stats:  # after each phase (the last one's before the trim to n)
+            times.append(seconds)
             counts.append(min(count, self.n))
             fills.append(fill)
         tiled_spheres = max(1, int(sum(record["spheres"] for record in self.records)))

@@ -36,7 +36,8 @@ def test_obstacles_may_reach_outside_the_shape_and_a_tuple_is_a_packing():
     centers, radii = np.array([[0.0, 0.5, 0.5], [1.0, 1.0, 1.0]]), np.array([0.3, 0.4])  # on a face, at a corner
     packing = nd.pack(CUBE, n=60, obstacles=(centers, radii), seed=2, progress=False)
     assert _clear_of(packing, centers, radii) >= 0 and nd.verify(packing, CUBE).ok
-    same = nd.pack(CUBE, n=60, obstacles=nd.Packing(centers=centers, radii=radii, rounds=np.zeros(2, int), volume=1.0), seed=2, progress=False)
+    given = nd.Packing(centers=centers, radii=radii, rounds=np.zeros(2, int), volume=1.0)
+    same = nd.pack(CUBE, n=60, obstacles=given, seed=2, progress=False)
     np.testing.assert_array_equal(packing.centers, same.centers)
 
 
@@ -45,6 +46,15 @@ def test_a_periodic_domain_keeps_clear_of_the_obstacles_images():
     centers, radii = np.array([[0.02, 0.5]]), np.array([0.15])  # its image pokes in across x = 1
     packing = nd.pack(cell, n=150, obstacles=(centers, radii), seed=0, progress=False)
     assert _clear_of(packing, centers, radii, periods=np.ones(2)) >= 0
+
+
+def test_small_obstacles_in_a_periodic_domain_do_not_cap_the_new_spheres():
+    # The images of a round's spheres are kept within twice its largest radius, since the greedy
+    # radii only shrink; obstacles say nothing of the radii to come.
+    cell = nd.Periodic(nd.Box([0, 0], [1, 1]))
+    packing = nd.pack(cell, n=5, obstacles=([[0.5, 0.5]], [0.01]), seed=0, progress=False)
+    assert packing.radii.max() > 0.2
+    assert _clear_of(packing, [[0.5, 0.5]], [0.01], periods=np.ones(2)) >= 0
 
 
 def test_the_numba_backend_agrees_with_numpy_around_obstacles():
@@ -61,7 +71,8 @@ def test_the_numba_backend_agrees_with_numpy_around_obstacles():
     ((np.zeros((2, 3)), np.ones(3)), "2 centres but radii of shape"),
     ((np.zeros((1, 3)), np.array([-1.0])), "radius positive"),
     ((np.array([[np.nan, 0, 0]]), np.ones(1)), "finite"),
-    ((np.zeros((2, 2)), np.ones(2)), "obstacles must be a Packing or"),
+    ((np.zeros((2, 2)), np.ones(2)), r"centres of shape \(2, 2\), but the shape is 3-D"),
+    ((np.zeros((3, 2)), np.ones(2)), r"centres of shape \(3, 2\)"),
 ])
 def test_bad_obstacles_are_named(obstacles, message):
     with pytest.raises(ParameterError, match=message):

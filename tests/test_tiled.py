@@ -58,6 +58,9 @@ def test_a_tiled_square_is_valid_as_a_whole_and_fills_within_one_percent_of_one_
     # The global phase placed every sphere above the halo, and no tile's sphere is larger than its box allows.
     assert np.all(pool.radii[: info["global_spheres"]] >= info["halo"])
     assert 0 < info["busy_share"] <= 1 and 0 < info["halo_share"] < 1
+    # The fill curve: the global phase, then one point a phase, in time order.
+    assert np.all(np.diff(pool.stats.time) >= 0) and np.all(np.diff(pool.stats.count) >= 0)
+    assert pool.stats.count[0] == info["global_spheres"] and pool.stats.count[-1] == 2000
 
 
 def test_a_tiled_packing_does_not_depend_on_where_the_tiles_ran(square_runs):
@@ -160,6 +163,8 @@ def test_the_command_line_packs_one_shape_in_tiles(tmp_path, capsys):
     assert main(["verify", str(out)]) == 0
     assert main(["pack", "box:dim=2", "-n", "400", "--tiles", "auto", "--fill", "0.5", "-q"]) == 2
     assert "it does not take --fill" in capsys.readouterr().err
+    assert main(["pack", "box:dim=2", "box:dim=3", "--tiles", "auto", "-q"]) == 2
+    assert "--tiles packs one shape in tiles" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main(["pack", "box:dim=2", "--tiles", "0,2"])
     assert "give auto, a positive integer" in capsys.readouterr().err

@@ -533,10 +533,11 @@ def test_other_spheres_with_the_same_ends_are_not_taken_for_the_last_ones(name):
     lower, upper = np.array([[0.4, 0.4], [0.0, 0.8]]), np.array([[0.6, 0.6], [0.2, 1.0]])
     reach = np.full(2, 0.2)
     points = np.array([[0.5, 0.5], [0.12, 0.88]])
+    shape = nd.Box([0.0, 0.0], [1.0, 1.0])
     for centers in (first, other):
-        table = backend.near_spheres(lower, upper, reach, centers, radii[: len(centers)])
-        np.testing.assert_array_equal(table, REFERENCE.near_spheres(lower, upper, reach, centers, radii[: len(centers)]))
-        shape = nd.Box([0.0, 0.0], [1.0, 1.0])
-        got = backend.clearance(shape, points, centers, radii[: len(centers)], table)
-        np.testing.assert_allclose(got, REFERENCE.clearance(shape, points, centers, radii[: len(centers)], table),
+        some = radii[: len(centers)]
+        table = backend.near_spheres(lower, upper, reach, centers, some)
+        np.testing.assert_array_equal(table, REFERENCE.near_spheres(lower, upper, reach, centers, some))
+        got = backend.clearance(shape, points, centers, some, table)
+        np.testing.assert_allclose(got, REFERENCE.clearance(shape, points, centers, some, table),
                                    atol=1e-6 if name == "warp" else 1e-12)
