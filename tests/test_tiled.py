@@ -186,3 +186,15 @@ def test_local_workers_are_spread_over_the_gpus_given():
     assert seen == {"3", "5"}
     with pytest.raises(ParameterError, match="gpus must be GPU numbers"):
         Workers(2, gpus=["0"])
+
+
+def test_tiles_on_a_dask_cluster_give_the_packing_made_here():
+    distributed = pytest.importorskip("distributed")
+    square = nd.Box([0, 0], [1, 1])
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+    with cluster, distributed.Client(cluster) as client:
+        remote = nd.pack_tiled(square, n=600, tiles=4, client=client, seed=4, progress=False)
+    here = nd.pack_tiled(square, n=600, tiles=4, workers=1, seed=4, progress=False)
+    assert remote.params["tiled"]["workers"] == 2 and len(remote) == 600
+    np.testing.assert_array_equal(remote.centers, here.centers)
+    np.testing.assert_array_equal(remote.radii, here.radii)
