@@ -292,7 +292,8 @@ def pack_tiled(shape, n: int = 100_000, *, tiles=None, workers: int | None = Non
         As for :func:`ndpack.pack`, for the final float64 check of all the spheres.
     **pack_options
         Passed to :func:`ndpack.pack` for the global phase and every tile (``mode``, ``grid``
-        (cells per tile), ``iterations``, ``restarts``, ``backend``, ``device``).
+        (cells per tile and of the global phase; by default each band's tiles get cells of
+        about 4 times its largest radius), ``iterations``, ``restarts``, ``backend``, ``device``).
 
     Returns
     -------
@@ -309,6 +310,10 @@ def pack_tiled(shape, n: int = 100_000, *, tiles=None, workers: int | None = Non
                  "centers_only", "batch"):
         if name in pack_options:
             raise ParameterError(f"pack_tiled does not take {name}= (a tile's run is set by the tiling): leave it out")
+    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
+        raise ParameterError(f"n (the number of spheres) must be a positive integer, got {n!r}")
+    if isinstance(min_radius, bool) or not isinstance(min_radius, float | int) or not 0 <= min_radius < np.inf:
+        raise ParameterError(f"min_radius must be a non-negative number, got {min_radius!r}")
     if not (isinstance(band, float | int) and 0 < band < 1):
         raise ParameterError(f"band must lie in (0, 1) (each band's smallest radius over its largest), got {band!r}")
     on_invalid = _on_invalid(on_invalid)
@@ -328,6 +333,8 @@ def pack_tiled(shape, n: int = 100_000, *, tiles=None, workers: int | None = Non
                             dict(pack_options, on_invalid=on_invalid), bar)
             if first.stop_reason == "min_radius" and first.params["min_radius"] > min_radius:
                 run.bands(started)
+                if run.stop_reason == "interrupted":
+                    pool.stop()  # the tiles in flight are dropped (their phase had not finished), not waited for
     finally:
         bar.close()
     return run.packing(started, on_invalid)

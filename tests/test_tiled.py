@@ -131,6 +131,27 @@ def test_ctrl_c_keeps_the_phases_that_finished(monkeypatch):
     assert nd.verify(packing, square).ok
 
 
+def test_ctrl_c_on_a_pool_stops_its_workers_and_keeps_the_phases_that_finished(monkeypatch):
+    # Ctrl-C reaches this process, not the workers (they ignore it): here it comes as the third
+    # tile's spheres arrive; the pool is stopped, not waited for.
+    added = []
+    original = tiled._Spheres.add
+
+    def interrupted_third(self, tile, centers, radii, phase):
+        added.append(tile)
+        if len(added) == 3:
+            raise KeyboardInterrupt
+        original(self, tile, centers, radii, phase)
+
+    monkeypatch.setattr(tiled._Spheres, "add", interrupted_third)
+    stopped, original_stop = [], tiled.Workers.stop
+    monkeypatch.setattr(tiled.Workers, "stop", lambda self: stopped.append(1) or original_stop(self))
+    square = nd.Box([0, 0], [1, 1])
+    packing = nd.pack_tiled(square, n=3000, tiles=8, workers=2, progress=False)
+    assert packing.stop_reason == "interrupted" and stopped == [1]
+    assert 0 < len(packing) < 3000 and nd.verify(packing, square).ok
+
+
 @pytest.mark.parametrize("options, message", [
     (dict(band=1.5), "band must lie in"),
     (dict(tiles=[2, 0]), "tiles must be a positive integer"),
@@ -138,10 +159,12 @@ def test_ctrl_c_keeps_the_phases_that_finished(monkeypatch):
     (dict(fill=0.5), "does not take fill="),
     (dict(obstacles=None), "does not take obstacles="),
     (dict(workers=0), "workers must be a positive integer"),
+    (dict(n="many"), "n \\(the number of spheres\\) must be a positive integer"),
+    (dict(min_radius=-1.0), "min_radius must be a non-negative number"),
 ])
 def test_bad_options_are_named(options, message):
     with pytest.raises(ParameterError, match=message):
-        nd.pack_tiled(nd.Box([0, 0], [1, 1]), n=100, **options)
+        nd.pack_tiled(nd.Box([0, 0], [1, 1]), **{"n": 100, **options})
 
 
 def test_a_periodic_axis_needs_an_even_number_of_tiles():
