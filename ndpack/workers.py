@@ -56,7 +56,8 @@ class Workers:
                 raise ParameterError("gpus= spreads local processes over GPUs; on Dask, start a worker per GPU "
                                      "(dask-cuda's LocalCUDACluster) instead")
         self.client, self.shared = client, shared
-        self.processes = 1 if client is not None else max(1, min(workers or os.cpu_count() or 1, most or 1 << 30))
+        most = 1 << 30 if most is None else most  # no tasks (all done before): no pool to start
+        self.processes = 1 if client is not None else max(1, min(workers or os.cpu_count() or 1, most))
         self._pool = self._shared_future = None
         if client is not None and shared is not None:
             self._shared_future = client.scatter(shared, broadcast=True)

@@ -193,24 +193,6 @@ def test_the_command_line_packs_one_shape_in_tiles(tmp_path, capsys):
     assert "give auto, a positive integer" in capsys.readouterr().err
 
 
-def _visible_gpu(_shared, _task):
-    import os
-    import time
-
-    time.sleep(0.2)  # long enough that each worker takes a task
-    return os.environ.get("CUDA_VISIBLE_DEVICES")
-
-
-def test_local_workers_are_spread_over_the_gpus_given():
-    from ndpack.workers import Workers
-
-    with Workers(2, gpus=[3, 5]) as pool:
-        seen = {result for _, result, error in pool.run(_visible_gpu, dict.fromkeys(range(6))) if error is None}
-    assert seen == {"3", "5"}
-    with pytest.raises(ParameterError, match="gpus must be GPU numbers"):
-        Workers(2, gpus=["0"])
-
-
 def test_tiles_on_a_dask_cluster_give_the_packing_made_here():
     distributed = pytest.importorskip("distributed")
     square = nd.Box([0, 0], [1, 1])
