@@ -1052,10 +1052,10 @@ def _clear_of(packing: Packing, obstacles, margin: float, precision: str, on_inv
     centers, radii = obstacles
     if len(packing) == 0 or len(radii) == 0:
         return packing
-    count = len(radii)
+    count, period = len(radii), period_of(packing.shape)
     tol = DEFAULT_TOLERANCE * packing.shape.scale if packing.shape is not None else 0.0
     pairs, _ = overlapping_pairs(np.concatenate([centers, packing.centers]), np.concatenate([radii, packing.radii]),
-                                 tol, period_of(packing.shape))
+                                 tol, period)
     pairs = pairs[(pairs[:, 0] < count) & (pairs[:, 1] >= count)]  # obstacle, new sphere
     if len(pairs) == 0:
         return packing
@@ -1066,7 +1066,6 @@ def _clear_of(packing: Packing, obstacles, margin: float, precision: str, on_inv
         raise InvalidPackingError(f"the packing failed its final check: {found}; {cause}. {KEPT_IN_ERROR}",
                                   packing=packing)
     new_radii = packing.radii.copy()
-    period = period_of(packing.shape)
     for obstacle, index in pairs:
         new = index - count
         delta = packing.centers[new] - centers[obstacle]

@@ -38,7 +38,7 @@ from .oracle import ball_volume, check_compatible
 from .packing import Packing, RoundStats
 from .period import period_of
 from .rounds import SPLIT_RATIO
-from .protosphere import SAFETY_MARGIN, _ensure_valid, _on_invalid, pack
+from .protosphere import SAFETY_MARGIN, _check_parameters, _ensure_valid, _on_invalid, pack
 from .shapes.adapters import as_oracle
 from .shapes.periodic import Periodic
 from .shapes.primitives import Box
@@ -310,10 +310,7 @@ def pack_tiled(shape, n: int = 100_000, *, tiles=None, workers: int | None = Non
                  "centers_only", "batch"):
         if name in pack_options:
             raise ParameterError(f"pack_tiled does not take {name}= (a tile's run is set by the tiling): leave it out")
-    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
-        raise ParameterError(f"n (the number of spheres) must be a positive integer, got {n!r}")
-    if isinstance(min_radius, bool) or not isinstance(min_radius, float | int) or not 0 <= min_radius < np.inf:
-        raise ParameterError(f"min_radius must be a non-negative number, got {min_radius!r}")
+    _check_parameters(n, min_radius, None, None, 1, 1, 0, seed)  # pack's own checks of n, min_radius and seed
     if not (isinstance(band, float | int) and 0 < band < 1):
         raise ParameterError(f"band must lie in (0, 1) (each band's smallest radius over its largest), got {band!r}")
     on_invalid = _on_invalid(on_invalid)

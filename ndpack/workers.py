@@ -59,6 +59,7 @@ class Workers:
         most = 1 << 30 if most is None else most  # no tasks (all done before): no pool to start
         self.processes = 1 if client is not None else max(1, min(workers or os.cpu_count() or 1, most))
         self._pool = self._shared_future = None
+        self._futures = []  # the last Dask batch's, for stop()
         if client is not None and shared is not None:
             self._shared_future = client.scatter(shared, broadcast=True)
         elif self.processes > 1 or gpus:
@@ -135,7 +136,7 @@ class Workers:
             for process in processes:
                 process.join(5)
             self._pool = None
-        elif self.client is not None and getattr(self, "_futures", None):
+        elif self.client is not None and self._futures:
             self.client.cancel(self._futures)
 
     def __enter__(self) -> Workers:
