@@ -193,7 +193,7 @@ def _share(text: str) -> float:
 
 def _parser() -> argparse.ArgumentParser:
     from .named_shapes import BUILTIN
-    from .covering import CHECK_SAMPLES, DEFAULT_SAMPLES
+    from .covering import CHECK_SAMPLES, DEFAULT_SAMPLES, MAX_SPHERES
     from .io import table
     from .pictures.view import UP_CHOICES
     from .protosphere import AUTO_FAST_ABOVE
@@ -278,6 +278,9 @@ def _parser() -> argparse.ArgumentParser:
                        help=f"boundary samples the cover is made on (default {DEFAULT_SAMPLES})")
     cover.add_argument("--check-samples", type=_positive_int, default=CHECK_SAMPLES,
                        help=f"fresh boundary samples of the final check (default {CHECK_SAMPLES})")
+    cover.add_argument("--max-spheres", type=_integer_from(0), default=MAX_SPHERES, metavar="N",
+                       help=f"refuse, before any work, a protrusion estimated to need more spheres than this "
+                       f"(default {MAX_SPHERES:,}; 0: no limit)")
     cover.add_argument("--seed", type=_seed, default=0, help="random seed, an integer >= 0 (default 0)")
     cover.add_argument("--backend", help="backend of the packing that finds the medial axis (default: the fastest)")
     cover.add_argument("--device", help="cpu or cuda:N, for warp and numba-cuda")
@@ -295,6 +298,13 @@ def _parser() -> argparse.ArgumentParser:
                         "over every triangle (slow: points x triangles)")
     verify.add_argument("--trust-source", action="store_true",
                         help="run the script or module the file records as its shape (only for files you trust)")
+    verify.add_argument("--as", dest="kind", choices=("packing", "centers-only", "covering"),
+                        help="what to check, whatever the file says: packing (each sphere whole inside, no "
+                        "overlap, no period but --periodic's), centers-only (the centres inside), covering (the "
+                        "spheres cover the shape); default: what the file records, named in the verdict")
+    verify.add_argument("--periodic", type=_periodic_axes, metavar="AXES",
+                        help="the shape's bounding box is periodic along these axes: all, or numbers such as 0,1 "
+                        "(default: the period the file records)")
 
     render = commands.add_parser("render", help="draw a saved packing to .png, .svg or .pdf", formatter_class=raw,
                                  epilog=RENDER_EXAMPLES,
@@ -389,7 +399,7 @@ def _pack(args) -> int:
     if args.sign is not None:  # verify and render reload the mesh the same way
         packing.params["sign"] = args.sign
     report = packing.verify()
-    print(f"shape:    {args.shape} -> {shape!r}")
+    print(f"shape:    {source} -> {shape!r}")
     for note in mesh_notes(shape):
         print(f"note:     {note}")
     print(f"spheres:  {len(packing)} ({STOP_REASONS.get(packing.stop_reason, packing.stop_reason)})")
@@ -458,7 +468,13 @@ def _with_dim(spec: str, dim: int | None) -> str:
     ``annulus:inner=0.3,dim=4``); the spec as it is without one."""
     if dim is None:
         return spec
-    return spec + ("," if ":" in spec else ":") + f"dim={dim}"
+    _, colon, options = spec.partition(":")
+    given = [value for key, _, value in (option.partition("=") for option in options.split(",")) if key == "dim"]
+    if colon and given:  # box:dim=3 --dim 4 would pack a 4-D box labelled box:dim=3
+        if given != [str(dim)]:
+            raise ParameterError(f"{spec} says dim={','.join(given)} and --dim says {dim}: give the dimension once")
+        return spec
+    return spec + ("," if colon else ":") + f"dim={dim}"
 
 
 def _expand_shapes(given: list[str]) -> tuple[list[str], bool]:
@@ -591,7 +607,7 @@ def _cover(args) -> int:
         return _cover_robot(args)
     if args.package:
         raise ParameterError("--package applies to a URDF's meshes, and the shape is not a .urdf file: leave it out")
-    from .covering import cover
+    from .covering import TooManySpheres, cover
     from .shape_sources import describe, load_shape
 
     source = _with_dim(args.shape, args.dim)
@@ -605,15 +621,21 @@ def _cover(args) -> int:
     if args.protrusion is not None:
         protrusion = args.protrusion * float(math.dist(*shape.bounds))
     started = time.perf_counter()
-    covering = cover(shape, n=args.count, protrusion=protrusion, samples=args.samples,
-                     check_samples=args.check_samples, seed=args.seed, backend=args.backend, device=args.device,
-                     progress=not args.quiet and sys.stderr.isatty())
+    try:
+        covering = cover(shape, n=args.count, protrusion=protrusion, samples=args.samples,
+                         check_samples=args.check_samples, seed=args.seed, backend=args.backend, device=args.device,
+                         progress=not args.quiet and sys.stderr.isatty(), max_spheres=args.max_spheres or None)
+    except TooManySpheres as error:
+        raise _too_many(error, args, "a count (-n)") from None
     elapsed = time.perf_counter() - started
-    print(f"shape:    {args.shape} -> {shape!r}")
+    print(f"shape:    {source} -> {shape!r}")
     asked = (f"at most {args.count}" if args.count is not None
              else f"protrusion at most {protrusion:.4g}" + (f" ({args.protrusion:.2%} of the diagonal)"
                                                             if args.protrusion is not None else ""))
     print(f"spheres:  {len(covering)} ({asked})")
+    if covering.interrupted:
+        print(f"stopped:  by Ctrl-C while {covering.params['interrupted']}: the spheres made so far, checked on "
+              "fewer samples")
     print(f"covering: {covering.report.summary()}")
     for note in covering.notes:
         print(f"note:     {note}")
@@ -624,10 +646,24 @@ def _cover(args) -> int:
         if args.sign is not None:
             spheres.params["sign"] = args.sign
         print(f"saved:    {_save_or_keep(spheres, args.output, args.format, options)}")
+    if covering.interrupted:
+        print("ndpack: interrupted; " + ("kept the spheres made so far (they may leave gaps: see covering:)"
+                                         if args.output else "nothing saved (no --output)"), file=sys.stderr)
+        return 130
     return 0 if covering.report.covered else 1
 
 
+def _too_many(error, args, count: str) -> ParameterError:
+    """A covering refused as too many spheres, told in the command line's options."""
+    share = args.protrusion is not None
+    asked = f"--protrusion {args.protrusion:g}" if share else f"--protrusion-abs {args.protrusion_abs:g}"
+    larger = (f"--protrusion {error.suggested / error.diagonal:.2g}" if share
+              else f"--protrusion-abs {error.suggested:.3g}")
+    return ParameterError(error.text(asked, larger, count, "--samples", "--max-spheres 0 lifts the limit"))
+
+
 def _cover_robot(args) -> int:
+    from .covering import TooManySpheres
     from .robots import cover_urdf
 
     if args.format or args.option:
@@ -642,14 +678,21 @@ def _cover_robot(args) -> int:
                              "<robot>_spheres.urdf, <robot>_spheres.yml and report.json")
     packages = {name: str(folder) for name, folder in args.package}
     started = time.perf_counter()
-    robot = cover_urdf(args.shape, args.output, n=args.count, protrusion=args.protrusion_abs,
-                       protrusion_share=args.protrusion, packages=packages or None, holes=args.holes,
-                       seed=args.seed, progress=not args.quiet and sys.stderr.isatty(), samples=args.samples,
-                       check_samples=args.check_samples, backend=args.backend, device=args.device)
+    try:
+        robot = cover_urdf(args.shape, args.output, n=args.count, protrusion=args.protrusion_abs,
+                           protrusion_share=args.protrusion, packages=packages or None, holes=args.holes,
+                           seed=args.seed, progress=not args.quiet and sys.stderr.isatty(), samples=args.samples,
+                           check_samples=args.check_samples, backend=args.backend, device=args.device,
+                           max_spheres=args.max_spheres or None)
+    except TooManySpheres as error:  # a share is of each link's diagonal
+        raise _too_many(error, args, "a count per link (-n)") from None
     elapsed = time.perf_counter() - started
     print(robot.summary())
     print(f"time:     {elapsed:.2f} s")
     print(f"saved:    {robot.urdf}, {robot.yaml}, {robot.report}")
+    if robot.interrupted:
+        print(f"ndpack: interrupted; kept the {len(robot.links)} links covered before it", file=sys.stderr)
+        return 130
     return 0 if robot.covered else 1
 
 
@@ -661,18 +704,21 @@ def _load(path: str):
 
 
 def _recorded_shape(packing, override: str | None, required: bool, trust: bool = False, holes: str | None = None,
-                    sign: str | None = None):
+                    sign: str | None = None, period: bool = True):
     """The shape given on the command line, else the one the packing records (``params["source"]``).
 
     A recorded source that would run code (a script, a module, a package's plug-in) is used
     only with ``trust``: otherwise a crafted file could run anything on ``ndpack verify``.
     Where the shape is not ``required`` such a source is skipped with a note on stderr.
     A recorded mesh file is loaded with the packing's recorded ``holes`` (what inside meant when
-    it was packed) unless ``holes`` is given, and so with ``sign``."""
+    it was packed) unless ``holes`` is given, and so with ``sign``. With ``period`` the shape is
+    made periodic along the axes whose period the packing records."""
+    from .io.limits import printable
     from .shape_sources import code_in, is_mesh_file, load_shape
 
-    if override:
-        return _with_recorded_period(load_shape(override, holes, sign), packing)
+    if override:  # each dimension is compared before the shape is built: a file may name box:dim=1000000000
+        shape = load_shape(override, holes, sign, dim=packing.dim)
+        return _with_recorded_period(shape, packing) if period else shape
     source = packing.params.get("source")
     if source is None:
         if required:
@@ -680,7 +726,7 @@ def _recorded_shape(packing, override: str | None, required: bool, trust: bool =
         return None
     code = code_in(str(source))
     if code and not trust:
-        advice = (f"ndpack does not run code a file names: if you trust it, pass --shape {source} "
+        advice = (f"ndpack does not run code a file names: if you trust it, pass --shape {printable(source)} "
                   f"(or --trust-source)")
         if required:
             raise NdpackError(f"this packing records its shape as {code}; {advice}")
@@ -692,7 +738,12 @@ def _recorded_shape(packing, override: str | None, required: bool, trust: bool =
             holes = _recorded_choice(packing, "holes", HOLE_CHOICES, "pass --holes cap or --holes refuse")
         if sign is None:
             sign = _recorded_choice(packing, "sign", SIGN_CHOICES, "pass --sign")
-    return _with_recorded_period(load_shape(str(source), holes, sign), packing)
+    try:
+        shape = load_shape(str(source), holes, sign, dim=packing.dim)
+    except NdpackError as error:  # say that the file named it, and how to name another
+        raise type(error)(f"the shape this packing records ({printable(source)[:80]}) is refused: "
+                          f"{_one_line(error)}; pass --shape") from error
+    return _with_recorded_period(shape, packing) if period else shape
 
 
 def _with_recorded_period(shape, packing):
@@ -706,6 +757,20 @@ def _with_recorded_period(shape, packing):
     if not isinstance(periods, (list, tuple)) or len(periods) != shape.dim:
         raise NdpackError(f"the packing's recorded periods ({periods!r}) are not one per axis of the {shape.dim}-D "
                           "shape: pass --shape with the right shape")
+    if not all(period is None or (isinstance(period, (int, float)) and not isinstance(period, bool) and period > 0)
+               for period in periods):
+        raise NdpackError(f"the packing's recorded periods ({periods!r}) are not each a positive number or None")
+    if all(period is None for period in periods):
+        return shape
+    # The shape's bounds are the cell: a cell of other periods than the packing's would check
+    # the spheres against images that are not theirs.
+    lower, upper = shape.bounds
+    for axis, period in enumerate(periods):
+        extent = float(upper[axis] - lower[axis])
+        if period is not None and math.isfinite(extent) and not math.isclose(extent, period, rel_tol=1e-9):
+            raise NdpackError(f"the packing records a period of {period:.6g} along axis {axis}, but the shape "
+                              f"{shape!r} spans {extent:.6g} there: pass --shape whose bounds are the packing's cell "
+                              f"{packing.params.get('bounds', '')}".rstrip())
     return Periodic(shape, [period is not None for period in periods])
 
 
@@ -719,17 +784,31 @@ def _recorded_choice(packing, key: str, choices: tuple, advice: str) -> str | No
 
 
 def _verify(args) -> int:
+    """What is checked comes from --as and --periodic where given; else from the file, and then the
+    verdict names what the file loosened (a file may hold anything)."""
+    import dataclasses
+
     from .consistency import volume_problem
     from .verify import verify
 
     packing = _load(args.packing)
+    told = args.kind is not None or args.periodic is not None
     shape = _recorded_shape(packing, args.shape, required=True, trust=args.trust_source, holes=args.holes,
-                            sign=args.sign)
-    if "covering" in packing.params:
+                            sign=args.sign, period=not told)
+    if args.periodic is not None:
+        from .shapes.periodic import Periodic
+
+        shape = Periodic(shape, None if args.periodic == "all" else args.periodic)
+    if args.kind == "covering" or (args.kind is None and "covering" in packing.params):
         return _verify_covering(args, packing, shape)
-    report = verify(packing, shape, args.tol, independent=args.independent)
+    kind = None if args.kind is None else args.kind.replace("-", "_")
+    report = verify(packing, shape, args.tol, independent=args.independent, kind=kind)
+    if not told and packing.params.get("period") is not None:
+        report = dataclasses.replace(report, from_file=report.from_file + ("period",))
     print(f"{args.packing}: {len(packing)} spheres in {packing.dim}-D against {shape!r}")
     print(f"verified: {report.summary()}")
+    for note in report.notes():
+        print(f"note:     {note}")
     problem = volume_problem(packing)
     if problem:
         print(f"IMPOSSIBLE: {problem}")
@@ -744,10 +823,14 @@ def _verify_covering(args, packing, shape) -> int:
     if args.tol is not None or args.independent:
         raise ParameterError("--tol and --independent apply to packings; this file holds a covering (its spheres "
                              "overlap and reach outside the shape), checked on fresh samples: leave them out")
-    asked = packing.params["covering"].get("protrusion") if isinstance(packing.params["covering"], dict) else None
+    recorded = packing.params.get("covering")
+    asked = recorded.get("protrusion") if isinstance(recorded, dict) else None
     report = check_covering(shape, packing.centers, packing.radii)
     print(f"{args.packing}: a covering of {len(packing)} spheres in {packing.dim}-D against {shape!r}")
-    print(f"checked:  {report.summary()}")
+    told = "" if args.kind else ", as the file records"
+    print(f"checked:  as a covering{told} (spheres may overlap and reach outside): {report.summary()}")
+    if not args.kind:
+        print("note:     `ndpack verify --as packing` checks the spheres as a packing instead")
     too_far = asked is not None and report.max_protrusion > float(asked) * (1 + 1e-9)
     if too_far:
         print(f"REACHES OUT TOO FAR: {report.max_protrusion:.4g}, asked at most {float(asked):.4g}")
@@ -755,6 +838,7 @@ def _verify_covering(args, packing, shape) -> int:
 
 
 def _render(args) -> int:
+    from .io.limits import printable
     from .pictures import choose_up, picture
 
     packing = _load(args.packing)
@@ -784,8 +868,8 @@ def _render(args) -> int:
     print(f"wrote {picture(packing, output, kind=kind, **options)}")
     if kind != "fill" and packing.dim >= 3:  # which way is up, and why: the picture's report
         axes = (0, 1) if args.axes is None and draws_circles and packing.dim > 3 else args.axes
-        print(f"up:    {choose_up(packing, args.up or 'auto', axes)}; turn it with --up, --view AZIMUTH,ELEVATION "
-              "or --axes")
+        up = printable(choose_up(packing, args.up or "auto", axes))  # it may name the recorded file
+        print(f"up:    {up}; turn it with --up, --view AZIMUTH,ELEVATION or --axes")
     return 0
 
 
@@ -800,6 +884,7 @@ def _info(args) -> int:
     import numpy as np
 
     from .consistency import volume_problem
+    from .io.limits import printable  # everything printed from the file: its escapes shown, not obeyed
     from .packing import repair_summary
 
     packing = _load(args.packing)
@@ -811,7 +896,7 @@ def _info(args) -> int:
               "`ndpack verify` checks that they cover it)")
     else:
         print(f"spheres:    {len(packing)} in {packing.dim}-D, {len(packing.stats.count)} rounds, "
-              f"{STOP_REASONS.get(packing.stop_reason, packing.stop_reason or '-')}")
+              f"{printable(STOP_REASONS.get(packing.stop_reason, packing.stop_reason or '-'))}")
     if np.isfinite(packing.volume) and not covering:
         error = _plus_minus(packing.fill_error) if packing.volume_error else ""
         print(f"fill:       {packing.fill:.6f}{error} of volume {packing.volume:.6g}")
@@ -824,19 +909,19 @@ def _info(args) -> int:
         print("            ratio max/min {:.3g}".format(radii.max() / radii.min()))
         _radius_histogram(radii)
     if not covering:
-        print("repaired:   " + (repair_summary(packing.repair) if packing.repair
+        print("repaired:   " + (printable(repair_summary(packing.repair)) if packing.repair
                                  else "no (passed the final check as made)"))
     holes = packing.params.get("holes")
     if holes is not None:
         meaning = {"cap": "an open mesh's holes closed by caps", "refuse": "open meshes refused"}
-        print(f"holes:      {holes} ({meaning.get(holes, 'not an option ndpack knows')}; verify and render "
+        print(f"holes:      {printable(holes)} ({meaning.get(holes, 'not an option ndpack knows')}; verify and render "
               "reload the mesh so)")
     if len(packing.stats.time):
         print(f"time:       {packing.stats.time[-1]:.2f} s")
     if packing.medial_axis is not None and len(packing.medial_axis):
         print(f"medial:     {len(packing.medial_axis)} medial-axis points")
     for key, value in sorted(packing.params.items()):
-        print(f"  {key}: {value}")
+        print(f"  {printable(key)}: {printable(value)}")
     return 0
 
 
@@ -854,7 +939,7 @@ def _radius_histogram(radii, bins: int = 8, width: int = 40) -> None:
 
 def _backends(args) -> int:
     from .backends import available
-    from .kernels.compile import cache_folder, cached_modules
+    from .kernels.compile import cache_folder, cached_modules, kept_for_next_time
 
     status = available()
     for name, state in status.items():
@@ -862,7 +947,11 @@ def _backends(args) -> int:
     folder = cache_folder("numba").parent
     size = sum(path.stat().st_size for path in folder.rglob("*") if path.is_file())
     modules = cached_modules()
-    print(f"\ncompiled kernels are kept in {folder} ({size / 1e6:.1f} MB); deleting it is safe")
+    if kept_for_next_time():
+        print(f"\ncompiled kernels are kept in {folder} ({size / 1e6:.1f} MB); deleting it is safe")
+    else:
+        print(f"\ncompiled kernels are not kept: the cache folder was refused (the warning above says why); this "
+              f"process compiles into {folder}, removed when it ends")
     if not modules:
         print("none yet: the first packing on each backend compiles its kernels once (seconds to a minute)")
     for entry in modules:
@@ -951,7 +1040,10 @@ def _run(args) -> int:
 
 
 def _one_line(error) -> str:
-    return " ".join(str(error).split())
+    """An error's message on one line, with what a file put in it shown, never obeyed by the terminal."""
+    from .io.limits import printable
+
+    return printable(" ".join(str(error).split()))
 
 
 if __name__ == "__main__":

@@ -28,11 +28,22 @@ class _AboveProgressBars(logging.Handler):
             self.handleError(record)
 
 
-def notice(message: str) -> None:
-    """Tell the user ``message`` (INFO on the ``"ndpack"`` logger; see the module docstring)."""
+def _shown() -> logging.Logger:
+    """The logger, set to show notices where nobody configured logging (as a command-line tool would)."""
     if logger.level == logging.NOTSET and not logger.handlers and not logging.getLogger().handlers:
-        # Nobody configured logging: show notices, as a command-line tool would.
         logger.setLevel(logging.INFO)
         logger.addHandler(_AboveProgressBars())
         logger.propagate = False
-    logger.info(message)
+    return logger
+
+
+def notice(message: str) -> None:
+    """Tell the user ``message`` (INFO on the ``"ndpack"`` logger; see the module docstring)."""
+    _shown().info(message)
+
+
+def warn(message: str) -> None:
+    """Warn the user in one line, ``message`` (WARNING on the ``"ndpack"`` logger): for what ndpack
+    declined to do but worked around (a cache folder refused), where a Python warning would be
+    shown once per place in the code rather than once per process."""
+    _shown().warning(message)

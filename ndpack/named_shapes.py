@@ -12,10 +12,10 @@ entry is a factory ``f(**numbers) -> Oracle``. In the package's ``pyproject.toml
 
 from __future__ import annotations
 
-
 import numpy as np
 
 from .errors import ShapeError
+from .io import limits
 from .oracle import Oracle
 from .shapes import Ball, Box, Cylinder, Polygon, RoundedBox, Simplex, Torus
 
@@ -93,29 +93,17 @@ def _parameters(factory) -> dict | None:
 
 def from_spec(spec: str):
     """Build a named shape from ``name[:key=value,...]``, e.g. ``box:dim=4``."""
-    name, _, arguments = spec.partition(":")
-    name = name.strip().lower()
     shapes = registered()
+    name = spec.partition(":")[0].strip().lower()
     if name not in shapes:
         raise ShapeError(f"unknown shape {name!r}; known shapes are: {', '.join(shapes)}")
+    keywords = _arguments(spec)[1]
     factory = shapes[name]
     if hasattr(factory, "load"):  # an entry point: import the package only now
         try:
             factory = factory.load()
         except Exception as error:  # noqa: BLE001 - any import failure in a third-party package
             raise ShapeError(f"the package providing shape {name!r} failed to load: {error}") from None
-    keywords = {}
-    for item in filter(None, (part.strip() for part in arguments.split(","))):
-        key, equals, value = item.partition("=")
-        if not equals:
-            raise ShapeError(f"cannot read {item!r} in {spec!r}: write key=value, e.g. box:dim=4")
-        try:
-            number = float(value)
-        except ValueError:
-            raise ShapeError(f"{key} must be a number in {spec!r}, got {value!r}") from None
-        keywords[key.strip()] = int(number) if number.is_integer() and key.strip() == "dim" else number
-    if "dim" in keywords and keywords["dim"] < 1:
-        raise ShapeError(f"dim must be a positive integer in {spec!r}")
     accepted = _parameters(factory)
     unknown = [key for key in keywords if accepted is not None and key not in accepted]
     if unknown:
@@ -131,3 +119,33 @@ def from_spec(spec: str):
     return shape
 
 
+def spec_dim(spec: str) -> int | None:
+    """The dimension of the shape a spec names, read from the spec alone (its ``dim=``, else the
+    built-in shape's default), so that it can be compared with a packing's before anything is
+    built; None where the spec does not say (a package's shape without ``dim=``)."""
+    name, keywords = _arguments(spec)
+    if "dim" in keywords:
+        return keywords["dim"] if isinstance(keywords["dim"], int) else None
+    if name not in BUILTIN:
+        return None
+    default = (_parameters(BUILTIN[name]) or {}).get("dim")
+    return default if isinstance(default, int) else None
+
+
+def _arguments(spec: str) -> tuple[str, dict]:
+    """The name (lower case) and the numbers of ``name[:key=value,...]``; ``dim`` an int from 1 to
+    :data:`~ndpack.io.limits.MAX_DIM`, checked before any shape is sized by it."""
+    name, _, arguments = spec.partition(":")
+    keywords = {}
+    for item in filter(None, (part.strip() for part in arguments.split(","))):
+        key, equals, value = item.partition("=")
+        if not equals:
+            raise ShapeError(f"cannot read {item!r} in {spec!r}: write key=value, e.g. box:dim=4")
+        try:
+            number = float(value)
+        except ValueError:
+            raise ShapeError(f"{key} must be a number in {spec!r}, got {value!r}") from None
+        keywords[key.strip()] = int(number) if number.is_integer() and key.strip() == "dim" else number
+    if "dim" in keywords and not 1 <= keywords["dim"] <= limits.MAX_DIM:
+        raise ShapeError(f"dim must be a positive integer of at most {limits.MAX_DIM} in {spec!r}")
+    return name.strip().lower(), keywords

@@ -170,7 +170,8 @@ def repair_summary(repair: dict) -> str:
 
     steep = (f", {repair['steep']} where the distance rose faster than a distance (slope at least "
              f"{worst('worst_slope')})" if repair.get("steep") else "")
-    return (f"{repair['shrunk']} sphere(s) shrunk and {repair['dropped']} dropped after "
-            f"{repair['outside']} poked out (worst {worst('worst_poke_out')}), "
-            f"{repair['overlapping_pairs']} pair(s) overlapped (worst {worst('worst_overlap')}){steep}: "
-            f"{repair['cause']}")
+    # .get: a record may hold only some counts (an obstacle repair), or come from a file.
+    return (f"{repair.get('shrunk', 0)} sphere(s) shrunk and {repair.get('dropped', 0)} dropped after "
+            f"{repair.get('outside', 0)} poked out (worst {worst('worst_poke_out')}), "
+            f"{repair.get('overlapping_pairs', 0)} pair(s) overlapped (worst {worst('worst_overlap')}){steep}: "
+            f"{repair.get('cause', 'cause not recorded')}")

@@ -36,7 +36,9 @@ from .errors import KEPT_IN_ERROR, GridWarning, InvalidPackingError, ParameterEr
 from .oracle import Oracle, ball_volume, check_compatible, check_packable
 from .packing import Packing, RoundStats
 from .period import period_of
-from .rounds import FAST_WINDOW, POLISH_AHEAD, POLISH_WINDOW, SIZE_BAND, SPLIT_RATIO, Fast, Faithful, Sized
+from .reproducible import geometric_schedule, root
+from .rounds import (FAST_WINDOW, MAX_PROTOTYPES, POLISH_AHEAD, POLISH_WINDOW, SIZE_BAND, SPLIT_RATIO, Fast, Faithful,
+                     Sized)
 from .shapes.adapters import as_oracle
 from .shapes.mesh import recorded_holes
 from .shapes.plugin import check_plugin_slopes
@@ -102,6 +104,15 @@ WALL_SLACK = 10.0
 #: larger: :attr:`RunState.image_reach`). The greedy radii only shrink, so twice leaves room for
 #: the late finds of the fast mode; the images kept cost a layer of that width along each face.
 IMAGE_REACH = 2.0
+#: When no prototype has room left (after the dead ones restarted), a final search refines the
+#: cells that may still hold room before the run stops (RunState.search): level after level, each
+#: such cell splits in two across its longest side and both halves converge from fresh starts,
+#: and once room is found, on where more may hide. A search makes at most ``SEARCH_HALVINGS``
+#: halvings of every side (``SEARCH_HALVINGS * d`` levels), splits no cell shorter than the smallest
+#: radius that counts, and makes at most as many new cells as there were, or ``SEARCH_CELLS`` on a
+#: coarser grid, those of the largest bounds first: it costs about what placing the grid did (a 12-D
+#: ball on a grid of 2, full after one sphere: 1 s with 4,096 new cells, 69 s with 131,072).
+SEARCH_HALVINGS, SEARCH_CELLS = 6, 4096
 
 
 def cooling_schedule(
@@ -114,7 +125,8 @@ def cooling_schedule(
     """
     if iterations == 1:
         return np.array([start])
-    return start * (end / start) ** ((np.arange(iterations) / (iterations - 1)) ** power)
+    # Not np.power: its last bit depends on the CPU, and these steps steer every prototype.
+    return np.array(geometric_schedule(iterations, start, end, power))
 
 
 def schedules(mode: str, iterations: int) -> tuple[np.ndarray, np.ndarray]:
@@ -137,7 +149,7 @@ def grid_counts(bounds: np.ndarray, grid=None) -> np.ndarray:
     extent = bounds[1] - bounds[0]
     dim = len(extent)
     if grid is None:
-        side = (np.prod(extent) / DEFAULT_CELLS) ** (1.0 / dim)
+        side = root(float(np.prod(extent)) / DEFAULT_CELLS, dim)  # the same cells on every machine
         return np.maximum(1, np.round(extent / side)).astype(np.int64)
     counts = np.asarray(grid)
     # Whole, finite, at least 1, and numbers (a bool is not a cell count).
@@ -255,6 +267,7 @@ class RunState:
         if self.period is not None:
             self.image_reach = 0.5 * self.period.shortest - self.margin
             self._obstacles = (np.empty((64, self.dim)), np.empty(64), 0)
+        self.searched = None  # how the last final search ended (:meth:`search`), once one ran
         if obstacles is not None and len(obstacles[1]):
             # Spheres in place from the start (pack's obstacles): neither counted nor returned.
             self.insert(*obstacles, -1, counted=False)
@@ -307,6 +320,8 @@ class RunState:
                 f"found is {float(clearance.max()):.3g} inside): no cell centre or random start lay inside, so the "
                 f"first points were found by a search, in {int(alive.sum()):,} cells; spheres may come out well "
                 "below the largest that fit: pass a finer grid= if it fits in memory", GridWarning, stacklevel=4)
+        # Kept cells with no start inside wait for the final search (RunState.search), if any.
+        self._set_aside = {name: value[~alive] for name, value in cells.items()} if not alive.all() else None
         cells = {name: value[alive] for name, value in cells.items()}
         centers, radii, table = self.centers[:0], self.radii[:0], no_spheres[alive]
         points = points[alive]
@@ -529,6 +544,64 @@ class RunState:
         self.reconverge(dead, tries=REVIVE_TRIES, chunk=REVIVE_CHUNK)
         return int(np.count_nonzero(self.prototypes.gather(dead)[1] > self.margin))
 
+    def search(self, min_radius: float) -> bool:
+        """The final search, before a run stops for want of room: whether it found room for a
+        sphere of at least ``min_radius`` (and the safety margin, as the choice asks).
+
+        A prototype finds one local maximum of the clearance in its cell, and a cell much wider
+        than the gaps left can hide them from its starts: the paper's fixed grid ran out of room
+        with room left (a square on a grid of 2 stopped at 169 circles with a free disc 80 times
+        the last one's radius). So the cells that may hold room (their bound of the clearance
+        inside, :meth:`~ndpack.backends.prototypes.Prototypes.split_candidates`, reaches it)
+        split in two across their longest side, level after level, and both halves converge from
+        fresh random starts. Once a prototype has room, the levels go on with the cells that may
+        hold more than it found and are longer than ``SPLIT_RATIO`` times that (the fast mode's
+        rule), so that the next sphere is the largest gap at that resolution, not the first one
+        seen (a 6-D simplex on a grid of 3: the next sphere 0.0116 with a gap of 0.0557 left,
+        then radii up and down; with these levels, 0.0569 there and descending). The cells set
+        aside at the start (none of their starts lay inside) join first.
+
+        Bounded: at most ``SEARCH_HALVINGS`` halvings of every side (``SEARCH_HALVINGS * d``
+        levels), no cell shorter than the smallest radius that counts, at most as many new cells
+        as there were or ``SEARCH_CELLS``, whichever is more (the largest bounds split first),
+        and not past the time budget. :attr:`searched` records what it did and, where it found
+        no room, what ended it. The split cells stay: the run goes on with them, and a later
+        search from them.
+        """
+        store = self.prototypes
+        need = max(min_radius, self.margin) + self.margin  # rounds._usable: radius = clearance - margin
+        shortest = max(min_radius, 1e3 * self.margin)  # no cell this short splits (as in the fast mode)
+        most = max(SEARCH_CELLS, len(store))
+        searched = self.searched = {"levels": 0, "cells": 0, "ended": "no cell may hold room"}
+        if self._set_aside is not None:
+            aside, self._set_aside = self._set_aside, None
+            self.reconverge(store.add_cells(aside["lower"], aside["upper"], aside["reach"], aside["wall"]))
+            searched["cells"] = len(aside["reach"])
+        low, longest = need, shortest
+        for level in range(SEARCH_HALVINGS * self.dim + 1):
+            top = store.top()
+            if top >= need:  # room: refine on where more may hide, in cells long against it
+                low, longest = top, max(shortest, SPLIT_RATIO * top)
+            if level == SEARCH_HALVINGS * self.dim:
+                searched["ended"] = f"{SEARCH_HALVINGS} halvings of every side"
+                break
+            if self.out_of_time():
+                searched["ended"] = "time"
+                break
+            ids, bound = store.split_candidates(low, longest)
+            memory = MAX_PROTOTYPES - len(store)
+            allowed = max(0, min(most - searched["cells"], memory))
+            if len(ids) > allowed:
+                ids = np.sort(ids[np.argsort(-bound, kind="stable")[:allowed]])
+                searched["ended"] = f"{most:,} new cells" if allowed < memory else f"{MAX_PROTOTYPES:,} prototypes"
+            if len(ids) == 0:
+                break
+            both = np.concatenate([ids, store.split_cells(ids, self.wall_slack)])
+            store.tighten_reach(both, *self.obstacles)
+            self.reconverge(both)
+            searched["levels"], searched["cells"] = level + 1, searched["cells"] + len(ids)
+        return top >= need
+
     def insert(self, centers, radii, round_index, counted=True):
         """Add a round's spheres ``centers`` (k, d), ``radii`` (k,); in a periodic domain their
         centres wrapped into the cell, the reach of the images narrowed to the round's size
@@ -624,7 +697,8 @@ def pack(
         Faithful mode: up to this many mutually disjoint spheres per round; 1 is the paper's
         exact greedy order.
     mode : "auto", "faithful" or "fast"
-        ``"faithful"``: the paper's rounds on a fixed grid (with ``batch``). ``"fast"``: every
+        ``"faithful"``: the paper's rounds on a fixed grid (with ``batch``), refined only where
+        no prototype has room left, before the run would stop for it. ``"fast"``: every
         candidate within ``FAST_WINDOW`` (20%) of the largest clearance becomes a sphere in one
         round where it is disjoint from the larger ones, and cells split where their gaps have
         become small against them; for large counts (see docs/benchmarks.md for its fill
@@ -949,6 +1023,8 @@ def run(shape, backend, strategy, *, counts, mode, iterations, restarts, seed, n
         stop_reason = "interrupted"
     finally:
         bar.close()
+    if stop_reason in ("no_room", "min_radius") and state.searched is not None:
+        params["final_search"] = dict(state.searched, halvings=SEARCH_HALVINGS)
     table = np.array(stats, dtype=np.float64).reshape(-1, 3)  # seconds, count, fill
     inside = state.inside[: state.count]
     packing = Packing(
@@ -1016,6 +1092,8 @@ def _run_rounds(state, strategy, n, radius_range, fill, volume, started, stats, 
         cap = min(max_radius, state.image_reach)  # a periodic domain's images reach only so far
         centers, radii = strategy.choose(state, min_radius, n - state.inside_count, cap)
         if len(radii) == 0 and state.revive():
+            centers, radii = strategy.choose(state, min_radius, n - state.inside_count, cap)
+        if len(radii) == 0 and strategy.searches and state.search(min_radius):
             centers, radii = strategy.choose(state, min_radius, n - state.inside_count, cap)
         if len(radii) == 0:
             if state.out_of_time():  # a revival cut short proves nothing about room

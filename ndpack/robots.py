@@ -53,7 +53,9 @@ from urllib.parse import unquote
 
 import numpy as np
 
-from .covering import CHECK_SAMPLES, Covering, check_covering, cover
+from .covering import (CHECK_SAMPLES, DEFAULT_SAMPLES, MAX_SPHERES, Covering, TooManySpheres, check_covering,
+                       cover)
+from .covering import _refuse_too_many as _refuse_too_many_spheres
 from .errors import NdpackError, ParameterError, ShapeError
 from .io import curobo_yaml
 from .meshes import surface
@@ -61,7 +63,7 @@ from .shapes.mesh import TriangleMesh
 from .shapes.primitives import Ball, Box, Cylinder
 
 #: ``nd.cover`` options :func:`cover_urdf` passes on (the rest are its own, or per shape).
-COVER_OPTIONS = ("samples", "check_samples", "backend", "device")
+COVER_OPTIONS = ("samples", "check_samples", "backend", "device", "max_spheres")
 
 
 class RobotWarning(UserWarning):
@@ -135,6 +137,10 @@ class RobotCovering:
         The files written: the URDF with sphere collisions, cuRobo's spheres, the JSON report.
     seconds : float
         Wall time of the whole run.
+    interrupted : list of str
+        Where Ctrl-C stopped the run: the link being covered then, and those after it. They keep
+        their collision elements in the written URDF (a link's spheres are written only once its
+        covering is whole) and are in the report as ``"interrupted"``; empty for a whole run.
     """
 
     robot: str
@@ -145,11 +151,13 @@ class RobotCovering:
     yaml: Path
     report: Path
     seconds: float
+    interrupted: list = field(default_factory=list)
 
     @property
     def covered(self) -> bool:
-        """Every link was read, and fresh samples of each are all covered."""
-        return not self.failed and all(covering.report.covered for covering in self.links.values())
+        """Every link was read and covered, and fresh samples of each are all covered."""
+        return (not self.failed and not self.interrupted
+                and all(covering.report.covered for covering in self.links.values()))
 
     def summary(self) -> str:
         """A line per link: spheres, largest protrusion (and its share of the link's diagonal),
@@ -167,6 +175,9 @@ class RobotCovering:
                          f"{state:>7}  {covering.params.get('seconds', math.nan):>7.2f}")
         for name, reason in self.failed.items():
             lines.append(f"  {name.ljust(width)}  FAILED: {reason}")
+        if self.interrupted:
+            lines.append(f"  INTERRUPTED (Ctrl-C) while covering {self.interrupted[0]!r}: it and the "
+                         f"{len(self.interrupted) - 1} links after it keep their collision elements")
         return "\n".join(lines)
 
     def __repr__(self) -> str:
@@ -390,7 +401,8 @@ def cover_urdf(path, out_dir, *, n: int | None = None, protrusion: float | None 
         The URDF file.
     out_dir : str or Path
         The folder to write ``<robot>_spheres.urdf``, ``<robot>_spheres.yml`` and ``report.json``
-        into (made if missing).
+        into (made if missing). A name with a suffix (``arm.yml``) that is not a folder already is
+        refused as a file name; end it with ``/`` for a new folder so named (``"arm.v2/"``).
     n : int, optional
         Spheres per link, protruding as little as that allows. A link of several geometries
         shares them out by each one's bounding-box diagonal, one at least each (so a link of more
@@ -410,14 +422,23 @@ def cover_urdf(path, out_dir, *, n: int | None = None, protrusion: float | None 
     progress : bool, optional
         A progress bar over the links; by default only when stderr is a terminal.
     **cover_options
-        ``samples``, ``check_samples``, ``backend`` and ``device``, as for :func:`ndpack.cover`.
+        ``samples``, ``check_samples``, ``backend``, ``device`` and ``max_spheres``, as for
+        :func:`ndpack.cover`.
 
     Returns
     -------
     RobotCovering
         The coverings per link (spheres in the link's frame) and the paths written. Links that
         could not be read or covered are in its ``failed`` (and the report), each with a
-        :class:`RobotWarning`; they keep their collision elements in the written URDF.
+        :class:`RobotWarning`; they keep their collision elements in the written URDF. Ctrl-C
+        stops the run within a second or so: the links covered by then are written (the files
+        and report as for a whole run), the rest are in its ``interrupted``.
+
+    Raises
+    ------
+    ndpack.covering.TooManySpheres
+        Before any link is covered, where the protrusion calls for more spheres on a link than
+        ``max_spheres`` or ``samples`` (see :func:`ndpack.cover`), naming the link.
     """
     from tqdm.auto import tqdm
 
@@ -440,16 +461,16 @@ def cover_urdf(path, out_dir, *, n: int | None = None, protrusion: float | None 
     path = Path(path)
     root = _parse_urdf(path)
     robot = root.get("name") or path.stem
-    out_dir = Path(out_dir)
-    if out_dir.exists() and not out_dir.is_dir():
-        raise ParameterError(f"{out_dir} is a file: give a folder to write the robot's spheres into")
-    out_dir.mkdir(parents=True, exist_ok=True)
+    out_dir = _out_dir(out_dir)
     links = read_urdf_links(path, packages=packages, holes=holes, strict=False)
+    if n is None:
+        _refuse_too_many(links, protrusion, protrusion_share, cover_options)
+    out_dir.mkdir(parents=True, exist_ok=True)
 
-    coverings, failed, skipped, entries = {}, {}, [], {}
+    coverings, failed, skipped, entries, interrupted = {}, {}, [], {}, []
     show = sys.stderr.isatty() if progress is None else progress
     bar = tqdm(links, desc="covering links", disable=not show, dynamic_ncols=True, unit="link")
-    for link in bar:
+    for index, link in enumerate(bar):
         bar.set_postfix_str(link.name)
         if link.error is None and not link.shapes:
             skipped.append(link.name)
@@ -459,6 +480,11 @@ def cover_urdf(path, out_dir, *, n: int | None = None, protrusion: float | None 
             if link.error is not None:
                 raise ShapeError(link.error.removeprefix(f"link {link.name!r}: "))
             covering = _cover_link(link, n, protrusion, protrusion_share, seed, cover_options)
+        except KeyboardInterrupt:  # keep the links done; this one and the rest keep their elements
+            interrupted = [item.name for item in links[index:] if item.error is not None or item.shapes]
+            for name in interrupted:
+                entries[name] = {"status": "interrupted"}
+            break
         except NdpackError as error:
             reason = " ".join(str(error).split())
             failed[link.name] = reason
@@ -493,10 +519,45 @@ def cover_urdf(path, out_dir, *, n: int | None = None, protrusion: float | None 
                                      if key in ("samples", "check_samples")}}
     document = {"robot": robot, "urdf": str(path), "request": request,
                 "outputs": {"urdf": urdf_out.name, "yaml": yaml_out.name},
-                "covered": not failed and all(c.report.covered for c in coverings.values()),
-                "seconds": seconds, "links": entries, "failed": sorted(failed), "without_geometry": skipped}
+                "covered": not failed and not interrupted and all(c.report.covered for c in coverings.values()),
+                "seconds": seconds, "links": entries, "failed": sorted(failed), "without_geometry": skipped,
+                "interrupted": interrupted}
     report_out.write_text(json.dumps(document, indent=2) + "\n")
-    return RobotCovering(robot, coverings, failed, skipped, urdf_out, yaml_out, report_out, seconds)
+    return RobotCovering(robot, coverings, failed, skipped, urdf_out, yaml_out, report_out, seconds, interrupted)
+
+
+def _out_dir(out_dir) -> Path:
+    """``out_dir`` as a folder to write into: not a file, and not a name with a suffix unless it is
+    a folder already or ends with a separator (``-o arm.yml`` meant a file, and a robot writes three)."""
+    text = os.fspath(out_dir)
+    folder = Path(text).expanduser()
+    if folder.exists() and not folder.is_dir():
+        raise ParameterError(f"{text} is a file: give a folder to write the robot's spheres into")
+    if folder.suffix and not folder.is_dir() and not text.endswith(("/", os.sep)):
+        raise ParameterError(f"{text} looks like a file name (it ends in {folder.suffix}), but a robot's spheres are "
+                             f"three files written into a folder: <robot>_spheres.urdf, <robot>_spheres.yml and "
+                             f"report.json; give a folder, e.g. {folder.with_suffix('')}_spheres/ (end a folder's "
+                             f"name with / to keep a suffix: {text}/)")
+    return folder
+
+
+def _refuse_too_many(links, protrusion, protrusion_share, options) -> None:
+    """:class:`~ndpack.covering.TooManySpheres` before any work where a link's protrusion calls for more
+    spheres than ``max_spheres`` or ``samples`` (as :func:`ndpack.cover` would, link by link)."""
+    max_spheres = options.get("max_spheres", MAX_SPHERES)
+    samples = options.get("samples", DEFAULT_SAMPLES)
+    for link in links:
+        if link.error is not None or not link.shapes:
+            continue
+        length = protrusion if protrusion_share is None else protrusion_share * link.diagonal
+        for shape in link.shapes:
+            try:
+                _refuse_too_many_spheres(shape, float(length), max_spheres, int(samples))
+            except TooManySpheres as error:
+                error.subject = f"link {link.name!r} ({shape!r})"
+                if protrusion_share is not None:  # the share is of the link's diagonal
+                    error.diagonal = link.diagonal
+                raise
 
 
 def _file_name(name: str) -> str:
@@ -512,8 +573,11 @@ def _cover_link(link: LinkGeometry, n, protrusion, protrusion_share, seed, optio
     if protrusion_share is not None:
         protrusion = protrusion_share * link.diagonal
     counts = [None] * len(shapes) if n is None else _share_out(n, [shape.diagonal for shape in shapes])
-    parts = [cover(shape, n=count, protrusion=protrusion, seed=seed, progress=False, **options)
-             for shape, count in zip(shapes, counts)]
+    parts = []
+    for shape, count in zip(shapes, counts):
+        parts.append(cover(shape, n=count, protrusion=protrusion, seed=seed, progress=False, **options))
+        if parts[-1].interrupted:  # a link's spheres are written whole, or not at all
+            raise KeyboardInterrupt
     if len(parts) == 1:
         covering = parts[0]
         covering.params["seconds"] = time.perf_counter() - started

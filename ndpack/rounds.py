@@ -17,7 +17,9 @@ methods over the run's state (:class:`ndpack.protosphere.RunState`):
 
 :class:`Faithful` is the paper's round on a fixed grid; :class:`Fast` takes a window of
 candidates a round and refines the grid where gaps have become small. Only the fast mode keeps
-per-cell bookkeeping, so a faithful run builds none of it.
+per-cell bookkeeping, so a faithful run builds none of it, until the driver's final search
+(:meth:`~ndpack.protosphere.RunState.search`, for a strategy whose ``searches`` is True) refines
+its grid where no prototype has room left.
 """
 
 from __future__ import annotations
@@ -111,6 +113,7 @@ class Faithful:
     largest that are mutually disjoint, largest first (``batch = 1``: the exact greedy order)."""
 
     name = "faithful"
+    searches = True  # the driver's final search refines the cells before the run stops for room
 
     def __init__(self, batch: int = 1):
         self.batch = batch
@@ -153,6 +156,7 @@ class Fast:
     """
 
     name = "fast"
+    searches = True
 
     def __init__(self, state, window: float = FAST_WINDOW, ratio: float = SPLIT_RATIO,
                  polish_ahead: float | None = None):
@@ -290,6 +294,7 @@ class Sized(Fast):
     """
 
     name = "sized"
+    searches = False  # its choice gives radii up itself, and returns none only when none are left
 
     def __init__(self, state, radii, polish_ahead=None, band: float = SIZE_BAND):
         super().__init__(state, polish_ahead=polish_ahead)

@@ -24,8 +24,9 @@ import runpy
 import sys
 from pathlib import Path
 
-from .named_shapes import BUILTIN, from_spec, registered
-from .errors import ShapeError
+from .named_shapes import BUILTIN, from_spec, registered, spec_dim
+from .errors import DimensionError, ShapeError
+from .io.limits import printable
 from .oracle import Oracle
 from .samples import SAMPLES
 from .shapes.adapters import as_oracle
@@ -35,7 +36,7 @@ from .shapes.mesh import TriangleMesh
 MESH_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".3mf", ".dae")
 
 
-def load_shape(source: str, holes: str | None = None, sign: str | None = None):
+def load_shape(source: str, holes: str | None = None, sign: str | None = None, dim: int | None = None):
     """The shape a source string names; see the module's table.
 
     Parameters
@@ -47,34 +48,61 @@ def load_shape(source: str, holes: str | None = None, sign: str | None = None):
     sign : {"auto", "pseudonormal", "winding"}, optional
         For a mesh file: how inside is told (:class:`~ndpack.TriangleMesh`); refused for other
         sources.
+    dim : int, optional
+        The dimension the shape must have (a packing's): compared with what the source says
+        (:func:`source_dim`) before the shape is built, so that a file recording
+        ``box:dim=1000000000`` for a 2-D packing costs nothing, and with the shape built.
 
     Returns
     -------
     Oracle
     """
     text = source.strip()
+    shown = printable(text)
     if not text:
         raise ShapeError("the shape is empty: name a built-in shape (e.g. box:dim=3), a mesh file or a script")
     kind = _kind(text)
     if holes is not None and kind != "mesh":
-        raise ShapeError(f"--holes applies to a mesh file, and {text} is not one: leave it out "
+        raise ShapeError(f"--holes applies to a mesh file, and {shown} is not one: leave it out "
                          "(a script passes holes= to ndpack.TriangleMesh itself)")
     if sign is not None and kind != "mesh":
-        raise ShapeError(f"--sign applies to a mesh file, and {text} is not one: leave it out "
+        raise ShapeError(f"--sign applies to a mesh file, and {shown} is not one: leave it out "
                          "(a script passes sign= to ndpack.TriangleMesh itself)")
+    if dim is not None:
+        _check_dim(source_dim(text), dim, shown)
     path = Path(text).expanduser()
     if path.is_dir():
-        raise ShapeError(f"{text} is a folder, not a mesh file or a script")
+        raise ShapeError(f"{shown} is a folder, not a mesh file or a script")
     if kind in ("script", "mesh") and not path.exists():
-        raise ShapeError(f"no such file: {text}" + _sample_hint(path))
+        raise ShapeError(f"no such file: {shown}" + _sample_hint(path))
     if kind == "script":
-        return _checked(as_oracle(_from_script(path)), text)
+        shape = _checked(as_oracle(_from_script(path)), shown)
+    elif kind == "mesh":
+        shape = TriangleMesh.load(path, sign=sign or "auto", holes=holes)
+    elif kind == "spec":
+        shape = from_spec(text)
+    else:
+        name, _, attribute = text.partition(":")
+        shape = _checked(as_oracle(_from_plugin(name.strip(), attribute.strip())), shown)
+    if dim is not None:
+        _check_dim(shape.dim, dim, shown)
+    return shape
+
+
+def source_dim(source: str) -> int | None:
+    """The dimension of the shape ``source`` names, told without building it: a spec's ``dim=``
+    (or a built-in shape's default), 3 for a mesh file; None where only running code would tell
+    (a script, a module, a package's shape without ``dim=``)."""
+    text = source.strip()
+    kind = _kind(text)
     if kind == "mesh":
-        return TriangleMesh.load(path, sign=sign or "auto", holes=holes)
-    if kind == "spec":
-        return from_spec(text)
-    name, _, attribute = text.partition(":")
-    return _checked(as_oracle(_from_plugin(name.strip(), attribute.strip())), text)
+        return 3
+    return spec_dim(text) if kind == "spec" else None
+
+
+def _check_dim(found: int | None, dim: int, shown: str) -> None:
+    if found is not None and found != dim:
+        raise DimensionError(f"the shape {shown} is {found}-D, but the packing is {dim}-D: name a {dim}-D shape")
 
 
 def _kind(text: str) -> str:
@@ -163,7 +191,7 @@ def code_in(source: str) -> str | None:
     kind = _kind(text)
     name = text.partition(":")[0].strip()
     if kind == "script":
-        return f"the Python script {text}"
+        return f"the Python script {printable(text)}"
     if kind == "mesh" or (kind == "spec" and name.lower() in BUILTIN):
         return None  # trimesh reads a mesh file as data; a built-in shape is ndpack's own
     if kind == "spec":

@@ -22,6 +22,9 @@ from .oracle import ball_volume
 CURVE_POINTS = 4096
 #: A continuous distribution's mean ball volume is the mean over this many of its quantiles.
 MEAN_SAMPLES = 20_000
+#: How far a discrete distribution's shares may sum from 1: rounding of shares typed to a few
+#: digits (1/3 as 0.333333), not a share misread.
+SHARES_SUM_TOLERANCE = 1e-6
 
 
 @dataclass(frozen=True)
@@ -86,12 +89,17 @@ class SizeDistribution:
     @classmethod
     def discrete(cls, radii, fractions, by: str = "count") -> SizeDistribution:
         """Classes of one radius each: ``radii`` (k,) and their shares ``fractions`` (k,) of the
-        count or of the mass (normalised to sum to 1)."""
+        count or of the mass, which sum to 1 (to within 1e-6; a sum such as 1.2 is refused rather
+        than scaled down, since it is more often a typing error than a wish)."""
         radii, fractions = _positive(radii, "radii"), np.asarray(fractions, dtype=np.float64).reshape(-1)
         if len(fractions) != len(radii) or not np.all(np.isfinite(fractions)) or np.any(fractions < 0) \
                 or not fractions.sum() > 0:
             raise ParameterError(f"fractions must be {len(radii)} non-negative numbers (one per radius) with a "
                                  f"positive sum, got {fractions.tolist()!r}")
+        if abs(fractions.sum() - 1) > SHARES_SUM_TOLERANCE:
+            raise ParameterError(f"fractions must sum to 1 (each radius's share of the {by}), but "
+                                 f"{fractions.tolist()!r} sum to {fractions.sum():.6g}: for relative weights, "
+                                 "pass them divided by their sum")
         if len(np.unique(radii)) != len(radii):
             raise ParameterError(f"the radii of a discrete distribution must differ, got {radii.tolist()!r}")
         order = np.argsort(radii)

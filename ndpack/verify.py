@@ -31,6 +31,11 @@ DEFAULT_TOLERANCE = 1e-12
 #: hole by a fraction of its radius.
 SAMPLES_PER_SPHERE = 48
 
+#: What a check asks of the spheres. ``"packing"``: each sphere whole inside the shape, no two
+#: overlapping. ``"centers_only"``: the centres inside (a DEM bed cut by centre, made with
+#: ``centers_only=True``), no two overlapping.
+KINDS = ("packing", "centers_only")
+
 
 @dataclass
 class Verification:
@@ -57,6 +62,11 @@ class Verification:
         Spheres with a point outside by the independent check (None where it did not run).
     centers_only : bool
         Whether only the centres had to lie inside.
+    kind : str
+        What was checked: ``"packing"`` or ``"centers_only"`` (:data:`KINDS`).
+    from_file : tuple of str
+        What the check took from the packing's own record rather than from the caller (a file
+        may hold anything): ``"centers_only"``, ``"period"``; the summary names each.
     """
 
     ok: bool
@@ -68,6 +78,11 @@ class Verification:
     overlapping: np.ndarray = field(repr=False)
     samples_outside: np.ndarray | None = field(default=None, repr=False)
     centers_only: bool = False
+    from_file: tuple = ()
+
+    @property
+    def kind(self) -> str:
+        return "centers_only" if self.centers_only else "packing"
 
     def __bool__(self) -> bool:
         return self.ok
@@ -79,6 +94,8 @@ class Verification:
             independent = (f"; independent check: {len(self.samples_outside)} spheres with points outside by the "
                            f"exact winding number ({SAMPLES_PER_SPHERE} points each)")
         where = " (centres only)" if self.centers_only else ""
+        if self.from_file:  # the file, not the caller, loosened the check: say so in the verdict
+            verdict += " as " + " and ".join(_FROM_FILE[what] for what in self.from_file) + " (as the packing records)"
         # With fewer than two spheres there is no pair, and with none no poke-out: say so, not -inf.
         poke = f"{self.worst_containment:.3g}" if np.isfinite(self.worst_containment) else "none, no sphere"
         overlap = f"{self.worst_overlap:.3g}" if np.isfinite(self.worst_overlap) else "none, no pair"
@@ -90,10 +107,25 @@ class Verification:
 
     __str__ = summary
 
+    def notes(self) -> list[str]:
+        """One line per thing the check took from the file, saying what it allowed and how to check
+        without it."""
+        return [_FROM_FILE_NOTE[what] for what in self.from_file]
+
     def raise_if_invalid(self) -> None:
         """Raise :class:`~ndpack.errors.NdpackError` with the summary unless the packing is valid."""
         if not self.ok:
             raise NdpackError(f"packing is invalid: {self.summary()}")
+
+
+_FROM_FILE = {"centers_only": "centres only", "period": "periodic"}
+_FROM_FILE_NOTE = {
+    "centers_only": "the packing records that only the centres must lie inside, so spheres may reach past the "
+                    "walls by their radius; `ndpack verify --as packing` (verify(..., kind='packing')) checks whole "
+                    "spheres",
+    "period": "the packing records a period, so spheres may cross those faces of the box and meet the others' images "
+              "there; `ndpack verify --as packing` checks without it, `--periodic AXES` states the axes yourself",
+}
 
 
 def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0, period=None):
@@ -162,7 +194,7 @@ def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0, 
 
 
 def verify(packing, shape=None, tol: float | None = None, radii=None, independent: bool = False,
-           centers_only: bool | None = None) -> Verification:
+           centers_only: bool | None = None, kind: str | None = None) -> Verification:
     """Check a packing in float64: every sphere inside ``shape``, no two overlapping.
 
     Parameters
@@ -182,19 +214,33 @@ def verify(packing, shape=None, tol: float | None = None, radii=None, independen
         with the oracle's distance or sign: a point counts as outside where it is not above 1/2.
         Costs points x triangles.
     centers_only : bool, optional
-        Check only that the centres lie inside (a packing made with ``centers_only=True``);
-        default: what the packing records (``params["centers_only"]``), else False.
+        Check only that the centres lie inside (a packing made with ``centers_only=True``); the
+        same as ``kind="centers_only"``.
+    kind : {"packing", "centers_only"}, optional
+        What to check (:data:`KINDS`); ``"packing"`` is the strict check whatever the packing
+        records. Default: what the packing records (``params["centers_only"]``), else
+        ``"packing"``; a looser check taken from the record is named in the verdict
+        (:attr:`Verification.from_file`), since a file may hold anything.
 
     Returns
     -------
     Verification
         Truthy when valid; ``summary()`` reports the worst violations.
     """
+    if kind is not None and kind not in KINDS:
+        raise ParameterError(f"kind must be one of {', '.join(map(repr, KINDS))}, not {kind!r} (a covering is "
+                             "checked with nd.check_covering)")
+    if kind is not None and centers_only is not None and centers_only != (kind == "centers_only"):
+        raise ParameterError(f"centers_only={centers_only} contradicts kind={kind!r}: give one of them")
+    if kind is not None:
+        centers_only = kind == "centers_only"
+    from_file = ()
     if radii is None:
         centers, radii = packing.centers, packing.radii
         shape = packing.shape if shape is None else shape
         if centers_only is None:
             centers_only = bool((getattr(packing, "params", None) or {}).get("centers_only", False))
+            from_file = ("centers_only",) if centers_only else ()
     else:
         centers = packing
     if shape is None:
@@ -212,7 +258,8 @@ def verify(packing, shape=None, tol: float | None = None, radii=None, independen
             f"{int(np.flatnonzero(bad_radius)[0])}"
         )
     if len(radii) == 0:
-        return Verification(True, 0, tol, -np.inf, -np.inf, np.zeros(0, np.int64), np.zeros((0, 2), np.int64))
+        return Verification(True, 0, tol, -np.inf, -np.inf, np.zeros(0, np.int64), np.zeros((0, 2), np.int64),
+                            centers_only=bool(centers_only), from_file=from_file)
     samples_outside = _independent_check(shape, centers, radii, tol) if independent else None
     poke_out = shape._distance(centers) + (0.0 if centers_only else radii)
     outside = np.flatnonzero(~(poke_out <= tol))  # NaN counts as outside
@@ -227,6 +274,7 @@ def verify(packing, shape=None, tol: float | None = None, radii=None, independen
         overlapping=pairs,
         samples_outside=samples_outside,
         centers_only=bool(centers_only),
+        from_file=from_file,
     )
 
 

@@ -458,3 +458,14 @@ def test_a_shape_one_sphere_fills_says_so_and_what_to_try(capsys):
     assert "spheres:  1 (no room left)" in printed and "annulus:dim=4" in printed
     assert main(["pack", "annulus:dim=4", "-n", "20", "--grid", "6"]) == 0
     assert "one sphere fills" not in capsys.readouterr().out
+
+
+def test_dim_given_twice_must_agree():
+    # box:dim=3 --dim 4 once packed a 4-D box labelled box:dim=3.
+    result = run("pack", "box:dim=3", "--dim", "4", "-n", "3")
+    assert result.returncode == 2 and "box:dim=3 says dim=3 and --dim says 4" in result.stderr
+    same = run("pack", "box:dim=3", "--dim", "3", "-n", "3", "--grid", "4", "-q")
+    assert same.returncode == 0 and "shape:    box:dim=3 -> Box(lower=[0.0, 0.0, 0.0]" in same.stdout
+    # --dim alone: the line names the shape packed, not the word typed.
+    added = run("pack", "box", "--dim", "4", "-n", "3", "--grid", "4", "-q")
+    assert added.returncode == 0 and "shape:    box:dim=4 -> Box(lower=[0.0, 0.0, 0.0, 0.0]" in added.stdout

@@ -106,7 +106,7 @@ def test_the_command_line_keeps_an_invalid_packing_and_flags_an_impossible_file(
 
     holed = holed_disc()
     holed._slope_checked = True
-    monkeypatch.setattr(shape_sources, "load_shape", lambda source, holes=None, sign=None: holed)
+    monkeypatch.setattr(shape_sources, "load_shape", lambda source, holes=None, sign=None, dim=None: holed)
     out = tmp_path / "holed.npz"
     assert cli.main(["pack", "holed.py", "-n", "20", "--mode", "fast", "--grid", "24", "-q", "-o", str(out)]) == 2
     line = capsys.readouterr().err.strip()

@@ -65,3 +65,44 @@ def test_a_new_process_with_another_hash_seed_packs_the_same():
                             env={**os.environ, "PYTHONHASHSEED": "12345"})
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == _digest(nd.pack(SHAPE, seed=3, backend="numpy", **OPTIONS))
+
+
+#: Packs a few cases on numpy and numba and prints each one's digest: run under another "machine".
+_DIGESTS = """
+import hashlib, sys
+import ndpack as nd
+
+cases = [
+    ("numba", nd.Box([0] * 4, [1] * 4), dict(n=60, mode="faithful")),
+    ("numpy", nd.Box([0] * 4, [1] * 4), dict(n=60, mode="faithful")),
+    ("numba", nd.Box([0] * 3, [1] * 3) - nd.Ball([1, 1, 1], 0.6), dict(n=150, mode="fast")),
+    ("numpy", nd.Box([0] * 3, [1] * 3) - nd.Ball([1, 1, 1], 0.6), dict(n=150, mode="fast")),
+]
+for backend, shape, options in cases:
+    p = nd.pack(shape, seed=0, backend=backend, progress=False, **options)
+    print(backend, hashlib.sha256(p.centers.tobytes() + p.radii.tobytes()).hexdigest())
+"""
+
+
+def _another_machine() -> dict:
+    """Environment variables under which this machine computes as an older x86-64 one would:
+    NumPy's vector routines of its baseline CPU only (no AVX2 or AVX-512 paths: their
+    ``np.power`` differed in the last bit and moved spheres), OpenBLAS's kernels of another CPU,
+    and one numba thread."""
+    features = np._core._multiarray_umath.__cpu_dispatch__
+    wide = np._core._multiarray_umath.__cpu_features__.get("AVX512F", False)
+    return {"NPY_DISABLE_CPU_FEATURES": " ".join(features), "OPENBLAS_CORETYPE": "Haswell" if wide else "SkylakeX",
+            "NUMBA_NUM_THREADS": "1"}
+
+
+def test_another_cpu_and_another_thread_count_pack_the_same_spheres():
+    """The same seed gives the same spheres on another x86-64 machine whatever its thread count
+    (issue 45: the quick start's 4-D fill was 0.5282 on an AMD machine, 0.5276 here): played here
+    by switching NumPy's and OpenBLAS's CPU paths and numba's threads."""
+    runs = []
+    for changes in ({"NUMBA_NUM_THREADS": "2"}, _another_machine()):
+        result = subprocess.run([sys.executable, "-c", _DIGESTS], capture_output=True, text=True, timeout=600,
+                                env={**os.environ, **changes})
+        assert result.returncode == 0, result.stderr[-2000:]
+        runs.append(result.stdout.split("\n"))
+    assert runs[0] == runs[1], f"other spheres under {_another_machine()}"

@@ -230,3 +230,26 @@ def test_links_between_pages_resolve():
         if not (ROOT / target).exists():
             broken.append(f"README.md -> {target}")
     assert not broken, f"links to missing files: {broken}"
+
+
+def test_every_choice_the_pages_give_an_option_is_one_the_command_line_takes():
+    """`--holes cap`, `--mode fast`, `--as packing`: where a page gives an option that takes a fixed
+    set of words one of them, the command line takes it (a page once told of `--holes repair`)."""
+    import argparse
+
+    from ndpack.cli import _parser
+
+    choices = {}
+    subparsers = next(action for action in _parser()._actions if isinstance(action, argparse._SubParsersAction))
+    for command in subparsers.choices.values():
+        for action in command._actions:
+            for flag in action.option_strings:
+                if action.choices is not None:
+                    choices.setdefault(flag, set()).update(action.choices)
+    assert {"--holes", "--mode", "--as"} <= set(choices)
+    wrong = []
+    for page in [*DOCS.glob("*.md"), ROOT / "README.md"]:
+        for flag, word in re.findall(r"(--[a-z-]+)[ =]([a-z][\w-]*)", page.read_text()):
+            if flag in choices and word not in choices[flag]:
+                wrong.append(f"{page.name}: {flag} {word} (takes {', '.join(sorted(choices[flag]))})")
+    assert not wrong, f"pages give options words the command line refuses: {wrong}"

@@ -16,8 +16,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / "ndpack"
 
 #: Bottom to top: a module may import from its own layer or any layer below it.
 LAYERS = (
-    ("base", ("ndpack.errors", "ndpack.log", "ndpack.period", "ndpack.rotation", "ndpack.conflicts",
-              "ndpack.ball_union", "ndpack.workers")),
+    ("base", ("ndpack.errors", "ndpack.log", "ndpack.period", "ndpack.rotation", "ndpack.reproducible",
+              "ndpack.conflicts", "ndpack.ball_union", "ndpack.workers")),
     # The scalar-kernel language, programs, the tape, the library, compiling, compiled_program.
     ("kernels", ("ndpack.kernels",)),
     ("meshes", ("ndpack.meshes",)),

@@ -39,7 +39,8 @@ def test_discrete_classes_by_mass_become_counts():
     [
         (lambda: SizeDistribution.discrete([0.1, -0.1], [1, 1]), "radii must be positive"),
         (lambda: SizeDistribution.discrete([0.1, 0.2], [1]), "fractions must be 2 non-negative"),
-        (lambda: SizeDistribution.discrete([0.1, 0.1], [1, 1]), "must differ"),
+        (lambda: SizeDistribution.discrete([0.1, 0.1], [0.5, 0.5]), "must differ"),
+        (lambda: SizeDistribution.discrete([0.1, 0.2], [0.6, 0.6]), r"sum to 1 .* sum to 1.2: for relative weights"),
         (lambda: SizeDistribution.cumulative([0.1, 0.2], [0.0, 0.9]), "cdf must rise from 0 to 1"),
         (lambda: SizeDistribution.lognormal(0.1, 0.0), "sigma > 0"),
         (lambda: SizeDistribution.discrete([0.1], [1], by="volume"), "by must be 'count' or 'mass'"),

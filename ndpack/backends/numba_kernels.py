@@ -401,10 +401,17 @@ def index_near(b, lower, upper, bound, counting, centers, radii, origin, top, he
             reach = bound
         side = top * 0.5 ** level
         cells = 1.0
+        empty = False
         for k in range(D):
             low[k] = math.floor((lower[b, k] - reach - level_rmax[level] - origin[k]) / side)
             high[k] = math.floor((upper[b, k] + reach + level_rmax[level] - origin[k]) / side)
             cells *= high[k] - low[k] + 1.0
+            # A bound below minus the level's largest radius (a cell inside a sphere) turns the
+            # window inside out: no sphere of the level is that near. Walked, its cell count,
+            # negative, sent the odometer over the other axes' ranges (1e9 cells: a hang).
+            empty = empty or high[k] < low[k]
+        if empty:
+            continue
         listed = cells > level_count[level]
         s = level_head[level]
         if not listed:

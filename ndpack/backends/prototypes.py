@@ -232,6 +232,16 @@ class Prototypes:
         """
         raise NotImplementedError
 
+    def add_cells(self, cell_lower, cell_upper, reach, wall):
+        """Cells ``cell_lower``, ``cell_upper`` (k, d), with their ``reach`` and ``wall`` (k,), each
+        with a new prototype at its centre, not converged (clearance -inf, as
+        :meth:`split_cells` makes them): ids ``len(self)`` on. The driver's final search adds the
+        cells it set aside at the start (none of their starts lay inside).
+
+        Returns the new prototypes' ids (k,) int64.
+        """
+        raise NotImplementedError
+
 
 class HostPrototypes(Prototypes):
     """Prototypes in host memory; the heavy work runs through the backend's array operations.
@@ -340,6 +350,20 @@ class HostPrototypes(Prototypes):
             self.longest[changed] = (self.cell_upper[changed] - self.cell_lower[changed]).max(axis=1)
             self.bound[changed] = self.reach[changed]
         return new
+
+    def add_cells(self, cell_lower, cell_upper, reach, wall):
+        count = len(reach)
+        self.cell_lower = np.concatenate([self.cell_lower, cell_lower])
+        self.cell_upper = np.concatenate([self.cell_upper, cell_upper])
+        self.reach = np.concatenate([self.reach, reach])
+        self.wall = np.concatenate([self.wall, wall])
+        self.points = np.concatenate([self.points, 0.5 * (cell_lower + cell_upper)])
+        self.clearance = np.concatenate([self.clearance, np.full(count, -np.inf)])
+        self.polished = np.concatenate([self.polished, np.zeros(count, dtype=bool)])
+        if self.bound is not None:
+            self.longest = np.concatenate([self.longest, (cell_upper - cell_lower).max(axis=1)])
+            self.bound = np.concatenate([self.bound, reach])
+        return np.arange(len(self.reach) - count, len(self.reach))
 
     def tighten_reach(self, ids, centers, radii):
         if len(ids) and len(radii):
@@ -474,6 +498,17 @@ class DevicePrototypes(Prototypes):
         device.launch("split_apply", count, device.upload(ids, "index"), self.d_lower, self.d_upper, self.d_reach,
                       self.d_wall, self.d_points, self.d_clearance, self.d_polished, self.d_bound, device.params, first,
                       float(wall_slack))
+        return np.arange(first, self.count)
+
+    def add_cells(self, cell_lower, cell_upper, reach, wall):
+        count, first = len(reach), self.count
+        self._reserve(first + count)
+        rows = {"d_lower": cell_lower, "d_upper": cell_upper, "d_points": 0.5 * (cell_lower + cell_upper),
+                "d_reach": reach, "d_wall": wall, "d_clearance": np.full(count, -np.inf), "d_bound": reach,
+                "d_polished": np.zeros(count, dtype=np.int64)}
+        for name, kind in self.ARRAYS:
+            self.device.write(getattr(self, name), first, rows[name], kind)
+        self.count += count
         return np.arange(first, self.count)
 
     def _reserve(self, count):

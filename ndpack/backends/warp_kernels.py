@@ -311,10 +311,15 @@ def index_near(lo: VecD, hi: VecD, bound: F, counting: int, centers: wp.array(dt
         if counting == 0:  # a sphere tightens the bound only within it: look no farther than that
             reach = bound
         cells = F(1.0)
+        empty = int(0)
         for k in range(D):
             low[k] = wp.floor((lo[k] - reach - level_rmax[level] - origin[k]) / side) - slack
             high[k] = wp.floor((hi[k] + reach + level_rmax[level] - origin[k]) / side) + slack
             cells = cells * (high[k] - low[k] + F(1.0))
+            if high[k] < low[k]:  # a window inside out (a cell inside a sphere): see numba_kernels
+                empty = 1
+        if empty == 1:
+            continue
         listed = cells > F(level_count[level])
         s = level_head[level]
         if not listed:

@@ -34,7 +34,9 @@ names one: ``liggghts`` and ``medial`` are only chosen by name, and so is ``curo
 every format but ``medial`` (read with :func:`load_medial`); a ``.json`` file is told apart by
 its content. cuRobo YAML is written and read with PyYAML.
 Files that hold only spheres load as a :class:`~ndpack.packing.Packing` whose volume is unknown
-(NaN, so its fill is NaN), whose rounds are 0, and whose params are empty.
+(NaN, so its fill is NaN), whose rounds are 0, and whose params are empty (a LAMMPS file's
+periodic box aside: ``bounds`` and ``period``). What a loader checks before it allocates, and its
+limits, are in :mod:`~ndpack.io.limits`.
 
 Every problem (unknown suffix or name, wrong dimension, missing or unreadable file) raises an
 :class:`~ndpack.errors.NdpackError` with one line.

@@ -5,11 +5,13 @@ written as one link (option ``link``, default ``body``). ``.yml`` and ``.yaml`` 
 (PyYAML's ``safe_dump``, :func:`curobo_yaml`); ``.json`` is chosen by ``format="curobo"`` and
 read back by :func:`~ndpack.io.load` from its content. Reading takes every link's spheres,
 drops disabled ones (a negative radius), and finds ``collision_spheres`` nested in a whole
-cuRobo robot configuration (under ``robot_cfg: kinematics:``).
+cuRobo robot configuration (under ``robot_cfg: kinematics:``). YAML is read with PyYAML's safe
+loader without aliases, which can make a few hundred bytes expand to billions of entries.
 """
 
 from __future__ import annotations
 
+import functools
 import json
 from pathlib import Path
 
@@ -17,6 +19,8 @@ import numpy as np
 
 from ..errors import NdpackError
 from ..packing import Packing
+from . import limits
+from .limits import check_nesting, parse_json, printable
 from .metadata import packing_from
 from .registry import Format, register, require_dim
 
@@ -101,7 +105,7 @@ def _read_curobo(path: Path) -> Packing:
         if document is None:
             raise ValueError("it has no 'collision_spheres' mapping")
         return curobo_packing(document)
-    document = json.loads(text)
+    document = parse_json(text)
     if not isinstance(document, dict) or "collision_spheres" not in document:
         raise ValueError("it has no top-level 'collision_spheres'")
     return curobo_packing(document)
@@ -122,13 +126,37 @@ def _find_collision_spheres(document, depth: int = 0):
 
 
 def _load_yaml(text: str):
-    """A YAML document, read with PyYAML's ``safe_load``."""
+    """A YAML document, read with PyYAML's safe loader without aliases (:func:`_no_alias_loader`)."""
     import yaml
 
     try:
-        return yaml.safe_load(text)
+        document = yaml.load(text, Loader=_no_alias_loader())  # a SafeLoader's subclass: safe, no aliases
     except yaml.YAMLError as error:
         raise ValueError(f"its YAML is not valid ({' '.join(str(error).split())})") from None
+    except RecursionError:
+        most = limits.MAX_NESTING
+        raise ValueError(f"its YAML is nested too deep to read (ndpack reads at most {most} levels)") from None
+    check_nesting(document, "YAML")
+    return document
+
+
+@functools.cache
+def _no_alias_loader():
+    """PyYAML's ``SafeLoader`` that refuses aliases (``*name``): an alias repeats a node, and a few
+    hundred bytes of aliases to aliases (with ``<<:`` merges, which copy) expand to billions of
+    entries. cuRobo's sphere files and ndpack's use none."""
+    import yaml
+
+    class NoAliasLoader(yaml.SafeLoader):
+        def compose_node(self, parent, index):
+            if self.check_event(yaml.AliasEvent):
+                event = self.peek_event()
+                alias = printable(event.anchor)
+                raise ValueError(f"its line {event.start_mark.line + 1} uses the YAML alias *{alias}: ndpack reads "
+                                 "YAML without aliases (a few of them can repeat a node billions of times)")
+            return super().compose_node(parent, index)
+
+    return NoAliasLoader
 
 
 register(Format("curobo", (".json", ".yml", ".yaml"), "3", "spheres, as cuRobo collision_spheres (JSON or YAML)",

@@ -31,7 +31,9 @@ back to the same float64 (a diameter ``2 r`` is exact in binary floating point).
 The array functions (:func:`data_box`, :func:`write_data`, :func:`read_data`, :func:`write_yade`,
 :func:`read_yade`) take and return NumPy arrays; the formats registered here wrap them for
 packings, with the box from the packing's recorded bounds and periods, else its shape's bounds,
-else the spheres' extent.
+else the spheres' extent. Loaded back, a data file whose header comment holds the input script's
+``boundary p p p`` line (as ndpack writes it) records its box and periods again
+(``params["bounds"]``, ``params["period"]``). Yade's text format has no cell.
 """
 
 from __future__ import annotations
@@ -54,6 +56,8 @@ SPHERE_COLUMNS = ("atom-ID", "atom-type", "diameter", "density", "x", "y", "z")
 _TITLE_LIMIT = 200
 
 _DIMENSION_2 = re.compile(r"\bdimension\s+2\b", re.IGNORECASE)
+#: The input script's ``boundary`` line, as ndpack writes it in a header comment: p, f, s, m or two of them an axis.
+_BOUNDARY = re.compile(r"\bboundary\s+([pfsm]{1,2})\s+([pfsm]{1,2})\s+([pfsm]{1,2})\b")
 _AXES = "xyz"
 
 
@@ -226,7 +230,9 @@ def read_data(path) -> tuple[np.ndarray, np.ndarray, dict]:
     radii : (n,) float64
     info : dict
         ``box`` ``(2, 3)`` float64 (LAMMPS's defaults -0.5 and 0.5 where a line is missing),
-        ``density`` ``(n,)`` float64 and ``ids`` ``(n,)`` int64, in the same order as the spheres.
+        ``density`` ``(n,)`` float64 and ``ids`` ``(n,)`` int64, in the same order as the spheres,
+        and ``periodic`` ``(3,)`` bool: the axes that a header comment ``boundary p p p`` (the
+        input script's line, which ndpack writes there) calls periodic; none without one.
 
     Raises
     ------
@@ -265,7 +271,7 @@ def read_data(path) -> tuple[np.ndarray, np.ndarray, dict]:
         elif keyword in ("avec", "bvec", "cvec", "abc origin"):
             raise ValueError("it has a general triclinic box (avec, bvec, cvec); ndpack reads orthogonal boxes only")
     if natoms is None:
-        natoms = 0  # LAMMPS's default
+        natoms = 0  # LAMMPS's default; the arrays are sized by the rows found, never by this count
     rows, style, section = None, None, None
     for number in range(body_start, len(lines)):
         content, _, comment = lines[number].partition("#")
@@ -309,7 +315,12 @@ def read_data(path) -> tuple[np.ndarray, np.ndarray, dict]:
     if any(_DIMENSION_2.search(text) for text in comments) and not centers[:, 2].any():
         centers = centers[:, :2]
     centers = np.ascontiguousarray(centers)
-    return centers, table[:, 0] / 2, {"box": box, "density": table[:, 1].copy(), "ids": ids}
+    periodic = np.zeros(3, dtype=bool)
+    for text in comments:
+        styles = _BOUNDARY.search(text)
+        if styles:
+            periodic = np.array([style == "p" for style in styles.groups()])
+    return centers, table[:, 0] / 2, {"box": box, "density": table[:, 1].copy(), "ids": ids, "periodic": periodic}
 
 
 # ---------------------------------------------------------------------------------- Yade
@@ -476,8 +487,18 @@ def _write_liggghts(packing: Packing, path: Path, density=1.0) -> None:
 
 
 def _read_lammps(path: Path) -> Packing:
-    centers, radii, _ = read_data(path)
-    return packing_from({"dim": centers.shape[1]}, centers, radii)
+    """The spheres, and where the header says ``boundary p ...``, the periodic cell: the box as
+    ``params["bounds"]`` and each axis's period (None for an open one) as ``params["period"]``,
+    as a periodic packing records them (so ``ndpack verify`` checks it as periodic)."""
+    centers, radii, info = read_data(path)
+    dim = centers.shape[1]
+    params = {}
+    if info["periodic"][:dim].any():
+        box = info["box"][:, :dim]
+        params["bounds"] = box.tolist()
+        params["period"] = [float(high - low) if periodic else None
+                            for low, high, periodic in zip(box[0], box[1], info["periodic"][:dim])]
+    return packing_from({"dim": dim, "params": params}, centers, radii)
 
 
 def _write_packing_yade(packing: Packing, path: Path) -> None:

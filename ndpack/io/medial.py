@@ -18,7 +18,9 @@ import numpy as np
 from ..errors import DimensionError, NdpackError
 from ..packing import Packing
 from .metadata import MEDIAL_VERSION, check_metadata, xyz
-from .ply import dimension_comment, read_points, write_points
+from . import limits
+from .limits import parse_json, shown
+from .ply import dimension_comment, points_dim, read_points, write_points
 from .registry import Format, binary_encoding, existing, reading, register, resolve
 
 
@@ -66,18 +68,18 @@ def _read_medial(path: Path) -> tuple[np.ndarray, np.ndarray]:
         meta, table = read_points(path)
         if meta is not None:
             check_metadata(meta, path, "ndpack-medial")
-        dim = meta["dim"] if meta else 3
+        dim = points_dim(meta)
         points = np.column_stack([table["x"], table["y"], table["z"]])[:, :dim]
         return points.astype(np.float64), table["radius"].astype(np.float64)
     with open(path) as file:
         first = file.readline()
         header = file.readline() if first.startswith("#") else first
     if first.startswith("#"):
-        check_metadata(json.loads(first[1:]), path, "ndpack-medial")
+        check_metadata(parse_json(first[1:]), path, "ndpack-medial")
     columns = header.strip().split(",")
     dim = len(columns) - 1
-    if dim < 1 or columns != [*(f"x{i}" for i in range(dim)), "radius"]:
-        raise ValueError(f"its header is {header.strip()!r}, not x0,...,radius")
+    if dim < 1 or dim > limits.MAX_DIM or columns != [*(f"x{i}" for i in range(dim)), "radius"]:
+        raise ValueError(f"its header is {shown(header.strip())}, not x0,...,radius (at most {limits.MAX_DIM}-D)")
     table = np.loadtxt(path, delimiter=",", skiprows=2 if first.startswith("#") else 1, ndmin=2)
     table = table.reshape(-1, dim + 1)
     return table[:, :dim], table[:, dim]

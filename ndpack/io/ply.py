@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import NdpackError
 from ..packing import Packing
+from .limits import check_count, parse_json, printable
 from .metadata import check_metadata, metadata, packing_from, xyz
 from .registry import Format, binary_encoding, register, require_dim
 
@@ -85,7 +86,7 @@ def read_points(path: Path) -> tuple[dict | None, np.ndarray]:
         if words[0] == "comment":
             text = line.strip()[len("comment") :].strip()
             if text.startswith("ndpack-metadata "):
-                meta = json.loads(text[len("ndpack-metadata ") :])
+                meta = parse_json(text[len("ndpack-metadata ") :])
         elif words[0] == "format":
             layout = words[1]
         elif words[0] == "element":
@@ -101,11 +102,19 @@ def read_points(path: Path) -> tuple[dict | None, np.ndarray]:
     if layout not in _PLY_ORDERS:
         raise ValueError(f"unknown PLY format {layout!r}")
     if [name for name, _, _ in elements] != ["vertex"]:
-        found = ", ".join(name for name, _, _ in elements) or "none"
+        found = printable(", ".join(name for name, _, _ in elements) or "none")
         raise ValueError(f"it has the elements {found}; ndpack reads PLY files of one 'vertex' element (points)")
     _, count, properties = elements[0]
     dtype = np.dtype([(name, _PLY_ORDERS[layout] + code) for name, code in properties])
+    missing = [name for name in ("x", "y", "z", "radius") if name not in dtype.names]
+    if missing:
+        raise ValueError(f"its vertices have no {', '.join(missing)} (ndpack writes x, y, z, radius)")
+    if count < 0:
+        raise ValueError(f"it declares {count} vertices")
     if layout == "ascii":
+        # A row of text holds at least a digit and a space or newline per property: the declared
+        # count is checked against that before the table is allocated.
+        check_count(count, "vertices", (len(body) + 1) // (2 * len(properties)), f"its {len(body):,} bytes of rows")
         table = np.zeros(count, dtype=dtype)
         if count:
             values = np.loadtxt(io.BytesIO(body), ndmin=2, max_rows=count)
@@ -119,10 +128,16 @@ def read_points(path: Path) -> tuple[dict | None, np.ndarray]:
                 f"it is truncated: {count} vertices need {count * dtype.itemsize} bytes, found {len(body)}"
             )
         table = np.frombuffer(body, dtype=dtype, count=count)
-    missing = [name for name in ("x", "y", "z", "radius") if name not in dtype.names]
-    if missing:
-        raise ValueError(f"its vertices have no {', '.join(missing)} (ndpack writes x, y, z, radius)")
     return meta, table
+
+
+def points_dim(meta: dict | None) -> int:
+    """The dimension checked metadata gives points stored with 3 coordinates (PLY, VTP): 3 without
+    metadata; a ValueError for more than 3."""
+    dim = meta.get("dim", 3) if meta else 3
+    if dim > 3:
+        raise ValueError(f"its metadata says {dim}-D, but its points have 3 coordinates")
+    return dim
 
 
 def dimension_comment(dim: int) -> list[str]:
@@ -153,7 +168,7 @@ def _read_ply(path: Path) -> Packing:
     meta, table = read_points(path)
     if meta is not None:
         check_metadata(meta, path)
-    dim = meta["dim"] if meta else 3
+    dim = points_dim(meta)
     points = np.column_stack([table["x"], table["y"], table["z"]])[:, :dim]
     rounds = table["round"] if "round" in table.dtype.names else None
     return packing_from(meta, points, table["radius"], rounds)

@@ -20,6 +20,7 @@ from typing import Callable
 
 from ..errors import DimensionError, NdpackError
 from ..packing import Packing
+from .limits import printable
 
 
 @dataclass(frozen=True)
@@ -200,10 +201,16 @@ def reading(fmt: Format, path: Path, read: Callable):
         return read(path)
     except NdpackError:
         raise
-    except (KeyError, IndexError, TypeError, ValueError, OSError, EOFError, SyntaxError, zipfile.BadZipFile) as error:
-        # SyntaxError covers xml.etree's ParseError; ValueError covers JSON and base64 errors.
+    except (KeyError, IndexError, TypeError, ValueError, OSError, EOFError, SyntaxError, zipfile.BadZipFile,
+            RecursionError, MemoryError) as error:
+        # SyntaxError covers xml.etree's ParseError; ValueError covers JSON and base64 errors. The
+        # loaders check sizes and nesting first (ndpack.io.limits): the last two are a backstop.
         reason = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
-        if path.is_file() and path.stat().st_size == 0:
+        if isinstance(error, RecursionError):
+            reason = "it is nested too deep to read"
+        elif isinstance(error, MemoryError):
+            reason = "reading it needs more memory than is free"
+        elif path.is_file() and path.stat().st_size == 0:
             reason = "it is empty (0 bytes)"
         elif isinstance(error, json.JSONDecodeError):
             reason = f"its JSON is not valid ({error.msg}, at character {error.pos})"
@@ -216,7 +223,8 @@ def reading(fmt: Format, path: Path, read: Callable):
             reason = "it holds arrays of Python objects (pickled), which ndpack never loads"
         elif "pickle" in reason:
             reason = "it is not an archive of arrays (NumPy would read it as pickled objects, which ndpack never loads)"
-        raise NdpackError(f"{path} is not a readable ndpack packing ({fmt.name} format): {reason}") from error
+        raise NdpackError(f"{path} is not a readable ndpack packing ({fmt.name} format): {printable(reason)}") \
+            from error
 
 
 def require_dim(dim: int, allowed: range, what: str) -> None:

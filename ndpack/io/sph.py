@@ -73,9 +73,15 @@ def _read_sph_level(path: Path, level: int) -> tuple[np.ndarray, np.ndarray]:
     levels, degree = int(lines[0][0]), int(lines[0][1])
     if levels < 1 or degree < 1:
         raise ValueError(f"its header '{levels} {degree}' has no spheres")
-    sizes = [degree**i for i in range(levels)]
-    if len(lines) - 1 < sum(sizes):
-        raise ValueError(f"a {levels}-level tree of branching {degree} has {sum(sizes)} nodes; found {len(lines) - 1}")
+    # Level i holds degree**i nodes: summed only while the file's lines can hold them, so that a
+    # header of a billion levels or branches is refused at once, not computed.
+    nodes, sizes, total = len(lines) - 1, [1], 1
+    while total <= nodes and len(sizes) < levels:
+        sizes.append(sizes[-1] * degree)
+        total += sizes[-1]
+    if total > nodes:
+        most = "" if len(sizes) == levels else "at least "
+        raise ValueError(f"a {levels}-level tree of branching {degree} has {most}{total:,} nodes; found {nodes:,}")
     if not -levels <= level < levels:
         raise NdpackError(f"{path} has {levels} levels; there is no level {level}")
     level = level % levels

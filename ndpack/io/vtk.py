@@ -19,7 +19,9 @@ import numpy as np
 
 from ..errors import NdpackError
 from ..packing import Packing
+from .limits import check_count, parse_json
 from .metadata import check_metadata, metadata, packing_from, xyz
+from .ply import points_dim
 from .registry import Format, binary_encoding, register, require_dim
 
 _VTK_TYPES = {"Float32": "f4", "Float64": "f8", "Int8": "i1", "Int16": "i2", "Int32": "i4", "Int64": "i8",
@@ -122,19 +124,25 @@ def _read_vtp(path: Path) -> Packing:
     for node in root:
         text = (node.text or "").strip()
         if node.tag is ET.Comment and text.startswith("ndpack-metadata "):
-            meta = check_metadata(json.loads(text[len("ndpack-metadata ") :]), path)
+            meta = check_metadata(parse_json(text[len("ndpack-metadata ") :]), path)
     pieces = root.findall("PolyData/Piece")
     if len(pieces) != 1:
         raise ValueError(f"it has {len(pieces)} pieces; ndpack writes one")
     piece = pieces[0]
     count = int(piece.get("NumberOfPoints", "0"))
-    points = _vtk_values(piece.find("Points/DataArray"), order, header).reshape(count, 3)
+    # Every point takes at least 6 bytes (3 coordinates of a digit and a space): checked before reading.
+    check_count(count, "points", path.stat().st_size // 6, f"its {path.stat().st_size:,} bytes")
+    points = _vtk_values(piece.find("Points/DataArray"), order, header)
+    if points.size != 3 * count:
+        raise ValueError(f"it declares {count:,} points, but its Points array holds {points.size:,} numbers, "
+                         f"not {3 * count:,}")
+    points = points.reshape(count, 3)
     arrays = {node.get("Name"): node for node in piece.findall("PointData/DataArray")}
     if "radius" not in arrays:
         raise ValueError("it has no point data array 'radius'")
     radii = _vtk_values(arrays["radius"], order, header)
     rounds = _vtk_values(arrays["round"], order, header) if "round" in arrays else None
-    dim = meta["dim"] if meta else 3
+    dim = points_dim(meta)
     return packing_from(meta, points[:, :dim], radii, rounds)
 
 

@@ -7,6 +7,8 @@ so Numba can keep the machine code on disk (``cache=True``) and a new process lo
 fraction of a second instead of compiling for 10-40 s; Numba's cache needs a source file.
 Warp reads the source of the functions it compiles, so its modules are files there as well.
 Files are named by a hash of their text, so a changed program never meets a stale binary.
+As Python and Numba run what they read there, the folder is trusted only when it and its files
+are this user's alone (:func:`cache_root`); otherwise a process compiles into a folder of its own.
 
 The text holds no number of any shape: built-in shapes are data for a tape interpreter
 (:mod:`ndpack.kernels.tape`), one per dimension, and sizes such as the finite-difference step
@@ -17,18 +19,22 @@ float type), on first use on a machine, and says so before it does (:func:`annou
 from __future__ import annotations
 
 import ast
+import atexit
 import hashlib
 import importlib.util
 import json
 import os
+import shutil
+import stat
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
 import numpy as np
 
-from ..log import notice
+from ..log import notice, warn
 from .language import STACK_DEPTH
 
 _numba_cache: dict[str, dict] = {}  # module text -> namespace
@@ -44,46 +50,191 @@ TYPICAL_SECONDS = {"numba": 15, "numba-cuda": 40, "warp": 30}
 TITLE = "# ndpack kernels: "
 
 
-def cache_folder(kind: str = "warp") -> Path:
-    """Where generated modules of ``kind`` ("warp" or "numba") are written.
+# ---------------------------------------------------------------------------------- the cache folder
+# Python imports the generated modules, and Numba unpickles its index (.nbi) and code (.nbc) files,
+# from the cache folder: a file there that another user could have written is code that user runs
+# as us. So the folder and every file ndpack or Numba reads in it are checked once per process,
+# before any is read; after that only we (or root) can add or change files there. A folder or file
+# that fails is never repaired (its mode is not ours to change): the whole cache is refused, with
+# one warning line, and this process compiles into a private folder made for it alone (mkdtemp,
+# 0700, removed at exit). That is the simplest safe choice: imports and Numba's ``cache=True`` work
+# unchanged, and what they find there is only what this process wrote.
+_roots: dict[str, Path] = {}  # configured cache folder -> the folder used for it in this process
+_scratch: list[Path] = []  # this process's private folder, once made
+_verdicts: dict[str, str | None] = {}  # a folder Numba caches in -> why it is refused (None: it is not)
+_deciding = threading.Lock()
 
-    ``$NDPACK_CACHE`` or ``~/.cache/ndpack``; where that cannot be written (a read-only home),
-    a folder in the system's temporary folder, so compiling still works and the code is kept
-    as long as that folder is. Python is imported from this folder and Numba unpickles its
-    cache there, so a folder is made private (0700) and one that another user owns or may
-    write is refused (:func:`_private`): on a shared machine anyone can create ``/tmp/ndpack-cache``.
+
+def _configured_root() -> Path:
+    """``$NDPACK_CACHE``, else ``$XDG_CACHE_HOME/ndpack``, else ``~/.cache/ndpack``."""
+    if os.environ.get("NDPACK_CACHE"):
+        return Path(os.path.abspath(os.path.expanduser(os.environ["NDPACK_CACHE"])))
+    xdg = os.environ.get("XDG_CACHE_HOME", "")
+    base = xdg if os.path.isabs(xdg) else os.path.join(os.path.expanduser("~"), ".cache")  # XDG: ignore relative
+    return Path(base) / "ndpack"
+
+
+def cache_root() -> Path:
+    """The folder of ndpack's kernel cache in this process.
+
+    ``$NDPACK_CACHE``, else ``$XDG_CACHE_HOME/ndpack``, else ``~/.cache/ndpack``, made private
+    (0700) where ndpack creates it. On its first use in a process it is checked: it, its
+    ``numba/`` and ``warp/`` folders, their ``__pycache__`` and every file in them must belong
+    to this user, be plain files or folders, and be writable by no other user who can reach
+    them (a folder's mode is never changed). Where any fails, or the folder cannot be made or
+    written, one warning line names it, the reason and the folder used instead: a private
+    temporary folder of this process, so kernels compile as usual but are not kept.
     """
-    root = os.environ.get("NDPACK_CACHE") or os.path.join(os.path.expanduser("~"), ".cache", "ndpack")
-    refusals = []
-    for base in (Path(root), Path(tempfile.gettempdir()) / "ndpack-cache"):
-        folder = base / kind
-        try:
-            base.mkdir(mode=0o700, parents=True, exist_ok=True)
-            folder.mkdir(mode=0o700, exist_ok=True)
-        except OSError:
-            continue
-        problem = _private(base) or _private(folder)
-        if problem:
-            refusals.append(problem)
-        elif os.access(folder, os.W_OK):
-            return folder
-    why = "; ".join(refusals) or f"{root} cannot be written"
-    raise OSError(f"no safe writable folder for compiled kernels ({why}): set NDPACK_CACHE to a folder of your own")
+    root = _configured_root()
+    key = str(root)
+    with _deciding:  # one check, and one warning, however many threads ask first
+        if key not in _roots:
+            problem = _open_cache(root)
+            if problem is None:
+                _roots[key] = root
+            else:
+                _roots[key] = _scratch_folder()
+                warn(f"kernel cache {root} refused: {problem}; compiling into {_roots[key]} for this process "
+                      "only (set NDPACK_CACHE to a folder of yours that only you may write, to keep compiled kernels)")
+    root = _roots[key]
+    root.mkdir(mode=0o700, parents=True, exist_ok=True)  # again where deleted meanwhile; ours if so
+    for kind in KINDS:
+        (root / kind).mkdir(mode=0o700, exist_ok=True)
+        (root / kind / "__pycache__").mkdir(mode=0o700, exist_ok=True)
+    return root
 
 
-def _private(folder: Path) -> str | None:
-    """Why ``folder`` is not safe to import code from, or None where it is. A folder of
-    another user is refused; one of ours that others may write (made under a umask of 002)
-    loses that permission, as the refusal would otherwise ask the user to do."""
-    status = folder.stat()
-    if hasattr(os, "getuid") and status.st_uid != os.getuid():
-        return f"{folder} belongs to another user (uid {status.st_uid})"
-    if os.name == "posix" and status.st_mode & 0o022:
-        try:
-            folder.chmod(status.st_mode & 0o755)
-        except OSError:
-            return f"{folder} may be written by other users (mode {status.st_mode & 0o777:o}): chmod go-w it"
+def kept_for_next_time() -> bool:
+    """Whether compiled kernels are kept for the next process (False: the cache folder was refused)."""
+    return cache_root() not in _scratch
+
+
+def cache_folder(kind: str = "warp") -> Path:
+    """Where generated modules of ``kind`` ("warp" or "numba") are written: a folder of
+    :func:`cache_root`, whose ``__pycache__`` holds Numba's compiled code (and Python's)."""
+    return cache_root() / kind
+
+
+#: The folders of generated modules in the cache folder, one per compiler.
+KINDS = ("numba", "warp")
+
+
+def _open_cache(root: Path) -> str | None:
+    """Make ``root`` and its folders where missing, and say why it may not be used (None: it may)."""
+    if root.exists() and not root.is_dir():
+        return f"{root} is not a folder"
+    try:
+        root.mkdir(mode=0o700, parents=True, exist_ok=True)
+        problem = _untrusted(root, root) or _open_ancestors(root)
+        if problem:  # nothing is made inside a folder that is refused
+            return problem
+        folders = [root]
+        for kind in KINDS:
+            (root / kind).mkdir(mode=0o700, exist_ok=True)
+            # Made here, private, before Numba or Python makes it with the umask's mode.
+            (root / kind / "__pycache__").mkdir(mode=0o700, exist_ok=True)
+            folders += [root / kind, root / kind / "__pycache__"]
+        for folder in folders:
+            problem = folder != root and _untrusted(root, folder)
+            if problem:
+                return problem
+            if not os.access(folder, os.W_OK | os.X_OK):
+                return f"{folder} cannot be written"
+    except OSError as error:
+        return f"{error.filename or root} cannot be made or read ({error.strerror or error})"
+    _verdicts.update((str(folder), None) for folder in folders if folder.name == "__pycache__")
     return None
+
+
+def _open_ancestors(root: Path) -> str | None:
+    """Why a folder above ``root`` lets other users replace the cache folder (None: it does not):
+    one that anyone may write without the sticky bit (as ``/tmp`` has). A group-writable one is
+    accepted, as a home under a umask of 002 with a group of one's own often is."""
+    if os.name != "posix":
+        return None
+    for parent in {*root.parents, *Path(os.path.realpath(root)).parents}:  # where a link is, and where it leads
+        mode = parent.stat().st_mode
+        if mode & stat.S_IWOTH and not mode & stat.S_ISVTX:
+            return f"{parent} above it may be written by anyone (mode {mode & 0o7777:o}), so it could be replaced"
+    return None
+
+
+def _untrusted(top: Path, folder: Path) -> str | None:
+    """Why a file in ``folder`` (``top`` or inside it) may hold what another user wrote, or None.
+
+    ``top``, each folder down to ``folder`` and each entry of ``folder`` must belong to us, be a
+    plain file (with no other name: a hard link is another way in) or folder, and be writable by
+    no one else who can reach it: a group or others may write an entry only where every folder
+    above it, from ``top``, lets them in. Anyone is assumed to reach ``top``.
+    """
+    if os.name != "posix":
+        return None  # no POSIX owner or mode to check
+    reach = 0o022  # write bits (group, others) of the classes that can reach the next entry
+    parts = folder.relative_to(top).parts
+    chain = [top, *(top.joinpath(*parts[:i + 1]) for i in range(len(parts)))]
+    for path in chain:
+        problem = _entry(path, reach, follow=path == top)
+        if problem:
+            return problem
+        reach &= (path.stat().st_mode & 0o011) << 1  # the search bits (x) of the group and of others
+    for path in folder.iterdir():
+        try:
+            problem = _entry(path, reach)
+        except FileNotFoundError:  # a temporary file of one of our processes, gone
+            continue
+        if problem:
+            return problem
+    return None
+
+
+def _entry(path: Path, reach: int, follow: bool = False) -> str | None:
+    status = path.stat() if follow else path.lstat()
+    if status.st_uid != os.getuid():
+        return f"{path} belongs to another user (uid {status.st_uid})"
+    if not (stat.S_ISDIR(status.st_mode) or stat.S_ISREG(status.st_mode)):
+        return f"{path} is not a plain file or folder"
+    if stat.S_ISREG(status.st_mode) and status.st_nlink > 1:
+        return f"{path} has other names (hard links)"
+    if status.st_mode & reach:
+        return f"{path} may be written by other users (mode {status.st_mode & 0o7777:o})"
+    return None
+
+
+def _scratch_folder() -> Path:
+    """This process's private folder for generated modules, made at its first use."""
+    if not _scratch:
+        folder = Path(tempfile.mkdtemp(prefix="ndpack-kernels-"))  # 0700, a new name: ours alone
+        atexit.register(shutil.rmtree, folder, ignore_errors=True)
+        _scratch.append(folder)
+    return _scratch[0]
+
+
+def _checked_disk_caches(namespace: dict) -> None:
+    """Numba keeps each function's code in the ``__pycache__`` checked by :func:`cache_root`,
+    unless ``NUMBA_CACHE_DIR`` (or a folder that cannot be written) sends it elsewhere: such a
+    folder is checked the same way (from ``NUMBA_CACHE_DIR`` down) before Numba reads it, and
+    where it fails, with one warning line, the functions cached there compile without a disk cache."""
+    for value in namespace.values():
+        dispatcher = getattr(value, "kernel", value)  # a CudaKernel wraps its dispatcher
+        path = getattr(getattr(dispatcher, "_cache", None), "cache_path", None)
+        if not path:
+            continue
+        if path not in _verdicts:
+            from numba.core import config
+
+            top = Path(config.CACHE_DIR) if config.CACHE_DIR else Path(path)
+            try:
+                top = top if Path(path).is_relative_to(top) else Path(path)
+                _verdicts[path] = _untrusted(top, Path(path))
+            except OSError as error:
+                _verdicts[path] = f"{path} cannot be read ({error.strerror or error})"
+            if _verdicts[path]:
+                warn(f"Numba's disk cache {path} refused: {_verdicts[path]}; ndpack's kernels are compiled "
+                      "without it in this process")
+        if _verdicts[path]:
+            # The dispatcher's own module holds the NullCache it starts with (numba and numba-cuda).
+            owner = next(k for k in type(dispatcher).__mro__ if "enable_caching" in vars(k))
+            dispatcher._cache = sys.modules[owner.__module__].NullCache()
 
 
 def _import_generated(text: str, kind: str):
@@ -92,10 +243,7 @@ def _import_generated(text: str, kind: str):
     path = cache_folder(kind) / f"ndpack_{digest}.py"
     # Rewrite only a missing or different file: Numba's disk cache is tied to the file's time.
     if not path.exists() or path.read_text() != text:
-        # Write then rename, so a concurrent process never imports half a file.
-        with tempfile.NamedTemporaryFile("w", dir=path.parent, suffix=".tmp", delete=False) as handle:
-            handle.write(text)
-        os.replace(handle.name, path)
+        _write(path, text)
     name = f"ndpack_generated_{kind}_{digest}"
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
@@ -104,21 +252,32 @@ def _import_generated(text: str, kind: str):
     return module
 
 
+def _write(path: Path, text: str) -> None:
+    """Write then rename, so a concurrent process never reads half a file; the file is private
+    (0600, from mkstemp) whatever the umask."""
+    with tempfile.NamedTemporaryFile("w", dir=path.parent, suffix=".tmp", delete=False) as handle:
+        handle.write(text)
+    os.replace(handle.name, path)
+
+
 # ---------------------------------------------------------------------------------- notices
 def announce(kind: str, what: str) -> None:
     """Say that ``kind`` ("numba", "numba-cuda" or "warp") is compiling ``what`` (the callers say
     it once per process and kind of kernels): about how long the longest such compile took on
     this machine before (or typically), and where the result is kept."""
     seconds = _measured().get(kind, TYPICAL_SECONDS[kind])
-    notice(f"compiling {kind} kernels for {what} (first use on this machine, about {seconds:.0f} s; "
-           f"kept in {cache_folder('numba').parent} for next time)")
+    kept = f"kept in {cache_root()} for next time" if kept_for_next_time() else "not kept: the cache folder was refused"
+    notice(f"compiling {kind} kernels for {what} (first use on this machine, about {seconds:.0f} s; {kept})")
 
 
 def _measured() -> dict:
     try:
-        return json.loads((cache_folder("numba").parent / "compile-times.json").read_text())
+        times = json.loads((cache_root() / "compile-times.json").read_text())
     except (OSError, ValueError):
         return {}
+    if not isinstance(times, dict):
+        return {}
+    return {kind: seconds for kind, seconds in times.items() if isinstance(seconds, (int, float))}
 
 
 def _record(kind: str, seconds: float) -> None:
@@ -127,7 +286,7 @@ def _record(kind: str, seconds: float) -> None:
     if seconds > times.get(kind, 0.0):
         times[kind] = round(seconds, 1)
         try:
-            (cache_folder("numba").parent / "compile-times.json").write_text(json.dumps(times))
+            _write(cache_root() / "compile-times.json", json.dumps(times))
         except OSError:
             pass
 
@@ -285,6 +444,7 @@ def numba_namespace(program, target: str, kernels: str, jit_kernels) -> dict:
     for name in program.kernels:
         namespace[name] = jit(namespace[name])
     jit_kernels(namespace, [node.name for node in ast.parse(kernels).body if isinstance(node, ast.FunctionDef)])
+    _checked_disk_caches(namespace)  # before the first call, when Numba reads its index
     _numba_cache[text] = namespace
     return namespace
 

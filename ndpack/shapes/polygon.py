@@ -79,8 +79,16 @@ def _check_simple(rings: list, area: float, perimeter: float) -> None:
 def _ring_area(ring: np.ndarray, what: str) -> float:
     """The signed area of a ring, or a :class:`ShapeError` naming it when it has none."""
     area = _signed_area(ring)
-    if abs(area) <= 1e-12 * float(np.ptp(ring, axis=0).max()) ** 2:
-        raise ShapeError(f"{what} has zero area: its vertices are all on one line")
+    size = float(np.ptp(ring, axis=0).max())
+    if abs(area) <= 1e-12 * size**2:
+        # No area, and yet the vertices may span the plane: a bow-tie's two loops cancel.
+        offsets = ring - ring[0]
+        far = offsets[np.argmax((offsets**2).sum(axis=1))]
+        if np.abs(offsets[:, 0] * far[1] - offsets[:, 1] * far[0]).max() <= 1e-12 * size**2:
+            raise ShapeError(f"{what} has zero area: its vertices are all on one line")
+        raise ShapeError(f"{what} crosses itself: its loops turn opposite ways, so their signed areas cancel "
+                         "(a bow-tie); split it into simple rings, or build the outline as a "
+                         "manifold3d.CrossSection (its fill rule says which parts are inside)")
     return area
 
 

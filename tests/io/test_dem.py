@@ -140,6 +140,34 @@ def test_periodic_domain_params_set_the_box(cube, tmp_path):
         periodic.save(tmp_path / "bad.data")
 
 
+def test_a_periodic_bed_keeps_its_period_through_a_data_file(tmp_path):
+    """Written with ``boundary p p p``, it loads with the cell and periods, verifies as periodic
+    (spheres cross the faces), and is written again the same; a file without the line has none."""
+    bed = nd.pack(nd.Periodic(nd.Box([0, 0, 0], [1, 1, 1])), n=30, grid=6, backend="numpy")
+    assert ((bed.centers - bed.radii[:, None] < 0) | (bed.centers + bed.radii[:, None] > 1)).any()
+    for program in ("lammps", "liggghts"):
+        path = bed.save(tmp_path / f"pbox-{program}.data", format=program)
+        loaded = nd.Packing.load(path, format="lammps")
+        assert loaded.params == {"bounds": [[0, 0, 0], [1, 1, 1]], "period": [1.0, 1.0, 1.0]}
+        assert_same_spheres(loaded, bed)
+        assert loaded.save(tmp_path / "again.data", format=program).read_text() == path.read_text()
+    result = subprocess.run([sys.executable, "-m", "ndpack.cli", "verify", str(tmp_path / "pbox-lammps.data"),
+                             "--shape", "box:dim=3"], capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0 and "against Periodic(Box(" in result.stdout, result.stdout + result.stderr
+    # One open axis, in 2-D (z is written periodic for LAMMPS's `dimension 2`, and not kept).
+    slab = nd.pack(nd.Periodic(nd.Box([0, 0], [2, 1]), axes=[0]), n=10, grid=8, backend="numpy")
+    assert nd.Packing.load(slab.save(tmp_path / "slab.data")).params == {"bounds": [[0, 0], [2, 1]],
+                                                                         "period": [2.0, None]}
+    # A shape whose cell is not the recorded one is refused, not checked against other images.
+    with pytest.raises(NdpackError, match="records a period of 2 along axis 0, but the shape"):
+        from ndpack.cli import _recorded_shape
+
+        _recorded_shape(nd.Packing.load(tmp_path / "slab.data"), "box:dim=2", required=True)
+    text = (tmp_path / "pbox-lammps.data").read_text().replace("boundary p p p", "boundary f f f")
+    (tmp_path / "closed.data").write_text(text)
+    assert nd.Packing.load(tmp_path / "closed.data").params == {}
+
+
 def test_liggghts_file(cube, square, tmp_path):
     text = cube.save(tmp_path / "bed.data", format="liggghts", density=2500).read_text()
     lines = text.splitlines()

@@ -6,12 +6,20 @@
 - A second process loads the compiled kernels from disk instead of compiling.
 - A first compile says so, in one line, before it starts.
 - Generated modules are named by their text, so a changed program never meets an old binary.
+- The cache folder is trusted only when it and the files Python and Numba read there are the
+  user's alone: otherwise one warning line, and this process compiles into a private folder.
+  Folders are never repaired (chmod), planted files are never loaded.
 """
 
+import hashlib
 import json
+import logging
 import os
+import pickle
 import subprocess
 import sys
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -195,34 +203,201 @@ def test_generated_modules_are_named_by_their_text(tmp_path, monkeypatch):
     assert os.stat(one.__file__).st_mtime_ns == modified
 
 
-def test_an_unwritable_cache_setting_falls_back_to_the_temporary_folder(tmp_path, monkeypatch):
+@pytest.fixture
+def said():
+    """The ndpack logger's warning lines while the test runs."""
+    lines = []
+    handler = logging.Handler(logging.WARNING)
+    handler.emit = lambda record: lines.append(record.getMessage())
+    logger = logging.getLogger("ndpack")
+    logger.addHandler(handler)
+    yield lines
+    logger.removeHandler(handler)
+
+
+def _mode(path):
+    return path.stat().st_mode & 0o7777
+
+
+def _give_away(path):
+    """``path`` given to another user (nobody), which only root may do."""
+    if os.geteuid() != 0:
+        pytest.skip("making a file of another user needs root")
+    os.chown(path, 65534, 65534)
+
+
+def test_a_new_cache_folder_and_what_ndpack_writes_there_are_private(tmp_path, monkeypatch, said):
+    monkeypatch.setenv("NDPACK_CACHE", str(tmp_path / "new"))
+    root = kernel_compile.cache_root()
+    assert root == tmp_path / "new" and kernel_compile.cache_folder("numba") == root / "numba"
+    for folder in (root, root / "numba", root / "numba" / "__pycache__", root / "warp"):
+        assert _mode(folder) == 0o700, folder
+    kernel_compile._record("numba", 12.5)
+    module = kernel_compile._import_generated("X = 3\n", "numba")
+    assert _mode(root / "compile-times.json") == 0o600 and _mode(root / "numba" / module.__file__) == 0o600
+    assert kernel_compile._measured()["numba"] == 12.5 and not said
+
+
+def test_the_cache_folder_follows_xdg_cache_home(tmp_path, monkeypatch):
+    monkeypatch.delenv("NDPACK_CACHE", raising=False)
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert kernel_compile.cache_root() == tmp_path / "xdg" / "ndpack"
+    monkeypatch.setenv("XDG_CACHE_HOME", "relative/cache")  # ignored, as the XDG specification asks
+    assert kernel_compile.cache_root() == tmp_path / "home" / ".cache" / "ndpack"
+    monkeypatch.setenv("NDPACK_CACHE", str(tmp_path / "mine"))  # first
+    assert kernel_compile.cache_root() == tmp_path / "mine"
+
+
+def _fallback(said, refused, reason):
+    """The one warning line names the refused folder, the reason and the folder used instead,
+    which is this process's private temporary folder."""
+    assert len(said) == 1, said
+    scratch = kernel_compile._scratch[0]
+    assert said[0].startswith(f"kernel cache {refused} refused: ") and reason in said[0], said
+    assert f"compiling into {scratch} for this process only" in said[0]
+    assert kernel_compile.cache_root() == scratch and _mode(scratch) == 0o700
+    assert scratch.parent == Path(tempfile.gettempdir()) and os.access(scratch / "numba", os.W_OK)
+
+
+def test_an_unwritable_cache_setting_warns_and_names_the_fallback(tmp_path, monkeypatch, said):
     blocker = tmp_path / "a-file"
     blocker.write_text("not a folder")
     monkeypatch.setenv("NDPACK_CACHE", str(blocker))
-    monkeypatch.setattr(kernel_compile.tempfile, "gettempdir", lambda: str(tmp_path / "tmp"))
-    folder = kernel_compile.cache_folder("numba")
-    assert folder == tmp_path / "tmp" / "ndpack-cache" / "numba" and os.access(folder, os.W_OK)
+    kernel_compile.cache_folder("numba")
+    _fallback(said, blocker, f"{blocker} is not a folder")
 
 
-def test_a_cache_folder_of_another_user_is_refused(tmp_path, monkeypatch):
-    # Anyone can create /tmp/ndpack-cache first on a shared machine; modules are imported from it.
-    monkeypatch.setenv("NDPACK_CACHE", str(tmp_path / "cache"))
-    monkeypatch.setattr(kernel_compile.tempfile, "gettempdir", lambda: str(tmp_path / "tmp"))
-    (tmp_path / "cache" / "numba").mkdir(parents=True)
-    (tmp_path / "tmp" / "ndpack-cache" / "numba").mkdir(parents=True)
-    someone_else = os.getuid() + 1
-    monkeypatch.setattr(kernel_compile.os, "getuid", lambda: someone_else)
-    with pytest.raises(OSError, match="belongs to another user.*NDPACK_CACHE"):
-        kernel_compile.cache_folder("numba")
-
-
-def test_a_cache_folder_is_private(tmp_path, monkeypatch):
-    monkeypatch.setenv("NDPACK_CACHE", str(tmp_path / "new"))
-    folder = kernel_compile.cache_folder("numba")
-    assert folder.stat().st_mode & 0o777 == 0o700 and folder.parent.stat().st_mode & 0o077 == 0
+@pytest.mark.parametrize("mode", [0o1777, 0o2775, 0o777], ids=["1777", "2775", "777"])
+def test_a_cache_folder_others_may_write_keeps_its_mode_and_is_refused(tmp_path, monkeypatch, said, mode):
+    # A root user pointing NDPACK_CACHE at /tmp must not change /tmp; nor a group's folder.
     shared = tmp_path / "shared"
-    (shared / "numba").mkdir(parents=True)
-    shared.chmod(0o777)
+    shared.mkdir()
+    shared.chmod(mode)
     monkeypatch.setenv("NDPACK_CACHE", str(shared))
     kernel_compile.cache_folder("numba")
-    assert shared.stat().st_mode & 0o022 == 0  # ours, so others lose the right to write
+    assert _mode(shared) == mode and not list(shared.iterdir())  # unchanged, and nothing made in it
+    _fallback(said, shared, f"{shared} may be written by other users (mode {mode:o})")
+
+
+def test_a_cache_folder_of_another_user_is_refused(tmp_path, monkeypatch, said):
+    # Anyone can create /tmp/ndpack-cache first on a shared machine; modules are imported from it.
+    theirs = tmp_path / "theirs"
+    theirs.mkdir(mode=0o755)
+    _give_away(theirs)
+    monkeypatch.setenv("NDPACK_CACHE", str(theirs))
+    kernel_compile.cache_folder("numba")
+    _fallback(said, theirs, f"{theirs} belongs to another user (uid 65534)")
+
+
+def test_a_cache_folder_under_one_anyone_may_replace_is_refused(tmp_path, monkeypatch, said):
+    # /tmp is sticky (no one deletes or renames what is not theirs); a 0777 folder is not.
+    (tmp_path / "open" / "cache").mkdir(parents=True)
+    (tmp_path / "open").chmod(0o777)
+    monkeypatch.setenv("NDPACK_CACHE", str(tmp_path / "open" / "cache"))
+    kernel_compile.cache_root()
+    _fallback(said, tmp_path / "open" / "cache", f"{tmp_path / 'open'} above it may be written by anyone")
+
+
+def test_group_writable_files_count_only_where_the_group_can_reach_them_and_links_never(tmp_path):
+    # Under a umask of 002 Numba writes its files 0664: harmless in ndpack's 0700 folders.
+    root = tmp_path / "cache"
+    assert kernel_compile._open_cache(root) is None
+    index = root / "numba" / "__pycache__" / "f.nbi"
+    index.write_bytes(b"")
+    index.chmod(0o664)
+    assert kernel_compile._open_cache(root) is None
+    for folder in (root, root / "numba", root / "numba" / "__pycache__"):
+        folder.chmod(0o755)
+    assert f"{index} may be written by other users (mode 664)" in kernel_compile._open_cache(root)
+    index.chmod(0o644)
+    assert kernel_compile._open_cache(root) is None
+    os.link(index, tmp_path / "another-name")  # could be changed through a name elsewhere
+    assert f"{index} has other names" in kernel_compile._open_cache(root)
+    index.unlink()
+    index.symlink_to(tmp_path / "another-name")  # leads to a file that is not checked here
+    assert f"{index} is not a plain file or folder" in kernel_compile._open_cache(root)
+
+
+#: Imports a generated module from the cache folder and calls a cached Numba function of it,
+#: which reads the function's index (.nbi) in the cache folder's numba/__pycache__, if trusted.
+PLANTED_SCRIPT = """
+import sys
+import numba
+from ndpack.kernels import compile as kernel_compile
+
+module = kernel_compile._import_generated(sys.argv[1], "numba")
+function = numba.njit(cache=True)(module.f)
+kernel_compile._checked_disk_caches({"f": function})
+print(function(1))
+"""
+PLANTED_MODULE = "def f(x):\n    return x + 1\n"
+
+
+class _Planted:
+    """Unpickling it writes ``marker``: what a planted index would run."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        return exec, (f"open({str(self.marker)!r}, 'w').write('ran')",)
+
+
+@pytest.mark.parametrize("how", ["ours (control)", "another user's", "group-writable", "in an open __pycache__"])
+def test_planted_numba_index_files_are_not_loaded(tmp_path, how):
+    cache, marker = tmp_path / "cache", tmp_path / "marker"
+    pycache = cache / "numba" / "__pycache__"
+    pycache.mkdir(parents=True)
+    for folder in (cache, cache / "numba", pycache):
+        folder.chmod(0o755)  # the user's own folders, as `mkdir -p` makes them
+    digest = hashlib.sha1(PLANTED_MODULE.encode()).hexdigest()[:20]
+    index = pycache / f"ndpack_{digest}.f-1.py{sys.version_info[0]}{sys.version_info[1]}{sys.abiflags}.nbi"
+    index.write_bytes(pickle.dumps(_Planted(marker)))
+    index.chmod(0o644)
+    if how == "another user's":
+        _give_away(index)
+    elif how == "group-writable":
+        index.chmod(0o664)
+    elif how == "in an open __pycache__":
+        pycache.chmod(0o777)
+    modes = {path: _mode(path) for path in (cache, pycache, index)}
+    env = {key: value for key, value in os.environ.items() if key != "NUMBA_CACHE_DIR"}
+    result = subprocess.run([sys.executable, "-c", PLANTED_SCRIPT, PLANTED_MODULE], capture_output=True, text=True,
+                            timeout=300, env={**env, "NDPACK_CACHE": str(cache)})
+    assert result.returncode == 0 and result.stdout.split() == ["2"], result.stderr[-3000:]
+    warnings = [line for line in result.stderr.splitlines() if "refused" in line]
+    if how == "ours (control)":  # the planted file would run where the cache is trusted
+        assert marker.exists() and not warnings
+        return
+    assert not marker.exists(), "a planted index file was unpickled"
+    assert len(warnings) == 1 and warnings[0].startswith(f"ndpack: kernel cache {cache} refused: "), result.stderr
+    reason = {"another user's": f"{index} belongs to another user",
+              "group-writable": f"{index} may be written by other users (mode 664)",
+              "in an open __pycache__": f"{pycache} may be written by other users (mode 777)"}[how]
+    assert reason in warnings[0] and "compiling into " in warnings[0] and "for this process only" in warnings[0]
+    assert modes == {path: _mode(path) for path in (cache, pycache, index)}  # nothing repaired
+
+
+def test_a_numba_cache_dir_others_may_write_is_not_read(tmp_path, monkeypatch, said):
+    # NUMBA_CACHE_DIR sends Numba's files there instead of the checked __pycache__.
+    import numba
+    from numba.core import config
+
+    monkeypatch.setenv("NDPACK_CACHE", str(tmp_path / "cache"))
+    for name, mode in (("private", 0o700), ("shared", 0o777)):
+        folder = tmp_path / name
+        folder.mkdir()
+        folder.chmod(mode)
+        monkeypatch.setattr(config, "CACHE_DIR", str(folder))
+        module = kernel_compile._import_generated(f"def g_{name}(x):\n    return x * 2\n", "numba")
+        function = numba.njit(cache=True)(getattr(module, f"g_{name}"))
+        assert function._cache.cache_path.startswith(str(folder))
+        kernel_compile._checked_disk_caches({"g": function})
+        kept = function._cache.cache_path
+        assert function(2) == 4
+        if name == "private":
+            assert kept.startswith(str(folder)) and not said
+        else:
+            assert kept is None and len(said) == 1 and said[0].startswith("Numba's disk cache ")
+            assert f"{folder} may be written by other users (mode 777)" in said[0]

@@ -273,6 +273,8 @@ def test_the_crossing_check_is_scale_free(scale):
         ([[0, 0], [1, 0], [1, np.nan]], (), "non-finite"),
         ([[0, 0], [1, 0], [np.inf, 1]], (), "non-finite"),
         ([[0, 0], [1, 1], [2, 2]], (), "zero area"),
+        # A bow-tie: its loops' signed areas cancel, but its vertices are not on one line.
+        ([[0, 0], [1, 1], [1, 0], [0, 1]], (), "the outer ring crosses itself.*bow-tie"),
         ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], (), r"\(m, 2\)"),
         ([0, 1, 2, 3], (), r"\(m, 2\)"),
         ([["a", "b"], [1, 0], [0, 1]], (), r"\(m, 2\)"),
