@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 import ndpack as nd
-from ndpack.protosphere import AUTO_FAST_ABOVE, AUTO_FAST_DIMS, choose_mode
+from ndpack.drivers.greedy.protosphere import AUTO_FAST_ABOVE, AUTO_FAST_DIMS, choose_mode
 
 from _common import machine_info, write_json
 

@@ -11,7 +11,7 @@ protrusion tolerance (a share of the bounding-box diagonal, 1% and 0.5% by defau
 and, at equal counts (``--counts``), ``nd.cover(mesh, n=k)`` beside k-means with ``k`` clusters:
 the protrusion each reaches.
 
-The baseline: sample the surface uniformly by area (``ndpack.boundary.boundary_samples``), cluster
+The baseline: sample the surface uniformly by area (``ndpack.drivers.collision.boundary.boundary_samples``), cluster
 the samples with k-means (k-means++ seeding, then 10 Lloyd iterations, as
 ``scipy.cluster.vq.kmeans2(..., minit="++")`` does), and give each cluster the sphere centred on
 its centroid that holds all its samples (radius: the farthest one). Every sample is then covered;
@@ -65,7 +65,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "bench")]  # this checkout's ndpack, whatever is installed
 
 import ndpack as nd  # noqa: E402
-from ndpack.boundary import boundary_samples  # noqa: E402
+from ndpack.drivers.collision.boundary import boundary_samples  # noqa: E402
 
 from _common import load_average, machine_info, write_json  # noqa: E402
 

@@ -30,7 +30,7 @@ def one(case: str, backend: str, mode: str) -> dict:
     import numpy as np
 
     import ndpack as nd
-    import ndpack.conflicts as conflicts
+    import ndpack.drivers.greedy.conflicts as conflicts
 
     dim = 12
     shape = nd.Ball(np.zeros(dim), 1.0)

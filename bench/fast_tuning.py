@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 import ndpack as nd
-from ndpack import protosphere, rounds
+from ndpack.drivers.greedy import protosphere, rounds
 from ndpack.backends import prototypes
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -47,7 +47,7 @@ SCHEDULES = protosphere.schedules
 
 
 def polish_from(start):
-    """:func:`ndpack.protosphere.schedules` with the polish's steps above ``start`` dropped."""
+    """:func:`ndpack.drivers.greedy.protosphere.schedules` with the polish's steps above ``start`` dropped."""
     def schedules(mode, iterations):
         steps, polish = SCHEDULES(mode, iterations)
         return steps, polish[polish <= start]

@@ -15,7 +15,7 @@ import argparse
 import numpy as np
 
 import ndpack as nd
-from ndpack import protosphere
+from ndpack.drivers.greedy import protosphere
 from ndpack.backends import prototypes
 
 

@@ -25,7 +25,7 @@ import argparse
 import numpy as np
 
 import ndpack as nd
-from ndpack import protosphere, rounds
+from ndpack.drivers.greedy import protosphere, rounds
 
 
 def main():

@@ -33,7 +33,7 @@ import time
 import numpy as np
 
 import ndpack as nd
-from ndpack import protosphere, rounds
+from ndpack.drivers.greedy import protosphere, rounds
 from ndpack.backends import get_backend, prototypes
 
 #: The backend attributes each variant sets.

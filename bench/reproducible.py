@@ -17,7 +17,7 @@ import json
 from pathlib import Path
 
 import ndpack as nd
-from ndpack.shape_sources import load_shape
+from ndpack.io.shape_sources import load_shape
 
 COW = Path(__file__).resolve().parents[1] / "ndpack" / "samples" / "cow.ply"
 #: (shape, count, options): 2-D to 5-D, faithful and fast, CSG, a mesh, a periodic box with a

@@ -29,7 +29,7 @@ import statistics
 import numpy as np
 
 import ndpack as nd
-from ndpack import protosphere
+from ndpack.drivers.greedy import protosphere
 from ndpack.backends import prototypes
 from ndpack.backends import get_backend
 from profile_kernels import Recorder, install  # bench/, beside this script

@@ -4,7 +4,7 @@
 
 A grid cell near the boundary whose centre and random starts all lie outside had no prototype
 before issue 21; it now steps its best start across the boundary, confined to the cell
-(``protosphere.STEP_IN``, :meth:`ndpack.protosphere.RunState._step_in`). Each case packs both
+(``protosphere.STEP_IN``, :meth:`ndpack.drivers.greedy.protosphere.RunState._step_in`). Each case packs both
 ways in one process (numba, seeds 0 and 1, both modes), every packing verified; the table gives
 the fill before and after and its ratio. Timings are printed but not the point (2 cores, noisy).
 """
@@ -18,7 +18,7 @@ import time
 import numpy as np
 
 import ndpack as nd
-from ndpack import protosphere
+from ndpack.drivers.greedy import protosphere
 
 #: The 4-D simplex on which a faithful grid of 4 ran out of room (15 of 51 spheres).
 SIMPLEX_4D = [[0.4602, 0.5821, -0.379, -0.3621], [0.8661, -0.039, -0.6904, -0.3044], [-0.8081, 0.568, 0.0748, -0.0781],

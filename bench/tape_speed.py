@@ -32,7 +32,7 @@ from _common import machine_info, write_json
 import ndpack as nd
 from ndpack.backends import get_backend
 from ndpack.kernels.compiled import compiled_program
-from ndpack.named_shapes import BUILTIN
+from ndpack.io.named_shapes import BUILTIN
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -24,8 +24,8 @@ import ndpack  # noqa: E402
 import ndpack.backends  # noqa: E402
 import ndpack.io  # noqa: E402
 import ndpack.pictures  # noqa: E402
-import ndpack.sphere_tree  # noqa: E402
-import ndpack.robots  # noqa: E402
+import ndpack.drivers.collision.sphere_tree  # noqa: E402
+import ndpack.drivers.collision.robots  # noqa: E402
 
 #: The top-level names by topic, in this order; a name of ``ndpack.__all__`` missing here goes
 #: to "Other", so that nothing public is left out.
@@ -42,7 +42,7 @@ TOPICS = {
                             "ParameterError", "BackendError", "KernelError", "MeshWarning"],
 }
 BACKEND_FUNCTIONS = ["available", "use", "get_backend", "names"]
-MODULES = [ndpack.io, ndpack.pictures, ndpack.sphere_tree, ndpack.robots]
+MODULES = [ndpack.io, ndpack.pictures, ndpack.drivers.collision.sphere_tree, ndpack.drivers.collision.robots]
 
 
 class _Text:

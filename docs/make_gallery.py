@@ -25,7 +25,7 @@ import numpy as np  # noqa: E402
 
 import ndpack as nd  # noqa: E402
 import ndpack.pictures  # noqa: E402
-from ndpack.named_shapes import from_spec  # noqa: E402
+from ndpack.io.named_shapes import from_spec  # noqa: E402
 
 IMAGES = HERE / "img" / "gallery"  # main() points it under --out
 #: The most spheres any packing gets (--max-spheres); None: as written below.
@@ -100,7 +100,7 @@ ndpack.pictures.save_figure(square, "square.png")
           f"Fill {ring.fill:.4f}. The built-in `annulus`: a 256-gon with a 256-gon hole "
           "(`nd.Polygon`). The black line is the outline, drawn from the distance.",
           """
-ring = nd.pack(ndpack.named_shapes.from_spec("annulus"), n=3000, mode="fast")   # ndpack pack annulus
+ring = nd.pack(ndpack.io.named_shapes.from_spec("annulus"), n=3000, mode="fast")   # ndpack pack annulus
 ndpack.pictures.save_figure(ring, "annulus.png")
 """)
 
@@ -132,8 +132,8 @@ ndpack.pictures.render(demo, "demo_cut.png", size=(600, 600), view=(-50, 65), cl
     entry("cow.png", "A triangle mesh: the cow, 3,000 spheres",
           f"Fill {cow.fill:.4f}. `cow.obj` (5,804 triangles) has faces that cross in its head, so its "
           f"inside is told by the winding number (`mesh.sign_method` is `{cow_mesh.sign_method}`; see "
-          "[meshes.md](meshes.md)). Its up is y, as OBJ files have it by convention: `up='auto'` (the "
-          "default) reads that from the file's name, `up='y'` says it.",
+          "[meshes.md](meshes.md)). Its up is y: `up='auto'` (the default) finds it standing on its hooves, "
+          "the axis OBJ files have up by convention; `up='y'` says it.",
           """
 cow = nd.pack(nd.TriangleMesh.load("cow.obj"), n=3000, mode="fast")
 ndpack.pictures.render(cow, "cow.png", size=(600, 600), up="y", view=(-35, 20))
@@ -186,7 +186,7 @@ def write_markdown(path, backend):
         "Made by `python docs/make_gallery.py` (do not edit by hand): every packing in the fast mode,",
         f"seed 0, `{backend}` backend, verified in float64 before it was drawn. The code under each",
         "picture is the gist; the script has all of it. It assumes `import numpy as np`,",
-        "`import ndpack as nd`, `import ndpack.pictures` and `import ndpack.named_shapes`.",
+        "`import ndpack as nd`, `import ndpack.pictures` and `import ndpack.io.named_shapes`.",
         "",
     ]
     for item in ENTRIES:

@@ -23,8 +23,6 @@ import argparse
 import time
 from pathlib import Path
 
-import numpy as np
-
 import ndpack as nd
 import ndpack.io
 import ndpack.pictures
@@ -62,18 +60,20 @@ def main():
     print(f"{len(packing):,} spheres, fill {packing.fill:.4f}, {elapsed:.1f} s "
           f"({packing.params['backend']} backend), {report.summary()}")
 
-    # The armadillo's up is its second axis (y): axes=(2, 0, 1) puts y up on screen.
-    view = dict(axes=(2, 0, 1), view=(args.azimuth, 15), size=(args.size, args.size))
-    picture, cut = out / f"{args.name}.png", out / f"{args.name}_cut.png"
-    ndpack.pictures.render(packing, picture, **view)
+    # Standing on its base (the armadillo on its feet, y up; a part on its flat face): the
+    # picture says which axis it stood up and why.
+    view = dict(view=(args.azimuth, 15), size=(args.size, args.size))
+    picture = ndpack.pictures.picture(packing, out / f"{args.name}.png", **view)
+    print(f"up: {picture.up}")
     # Leave out the spheres whose centre lies beyond the plane through the middle, facing the camera.
     _, _, towards = ndpack.pictures.camera_axes(*view["view"])
-    facing = np.zeros(3)
-    facing[list(view["axes"])] = towards  # the camera direction in the mesh's own coordinates
-    ndpack.pictures.render(packing, cut, clip=(packing.centers.mean(axis=0), facing), **view)
+    up = picture.up
+    facing = ndpack.pictures.view.screen_frame(up.axis, up.sign).T @ towards  # in the mesh's coordinates
+    cut = ndpack.pictures.picture(packing, out / f"{args.name}_cut.png", clip=(packing.centers.mean(axis=0), facing),
+                                  up=up, **view)
     files = [
-        picture,
-        cut,
+        picture.path,
+        cut.path,
         packing.save(out / f"{args.name}.npz"),
         packing.save(out / f"{args.name}.vtp"),
         packing.save(out / f"{args.name}.glb", subdivisions=1),

@@ -4,13 +4,14 @@ The distance is a plain scalar function of one point, written in ndpack's kernel
 (arithmetic, math functions, loops, indexing). ndpack compiles it for Numba on the CPU, Numba
 CUDA and NVIDIA Warp, and runs its Numba form for the NumPy reference.
 
-    python examples/gyroid_5d.py            # all installed backends, 200 spheres each
-    python examples/gyroid_5d.py -n 2000 --backend numba
+    python examples/gyroid_5d.py            # all installed backends, 200 spheres each, into ./out
+    python examples/gyroid_5d.py -n 2000 --backend numba --out /tmp/gyroid
 """
 
 import argparse
 import math
 import time
+from pathlib import Path
 
 import ndpack as nd
 
@@ -34,7 +35,10 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("-n", type=int, default=200, help="spheres per backend")
     parser.add_argument("--backend", action="append", help="backend(s) to run (default: every installed one)")
+    parser.add_argument("--out", default="out", help="output folder (default ./out): a packing per backend")
     args = parser.parse_args()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
     status = nd.backends.available()
     names = args.backend or [name for name, state in status.items() if state.startswith("ok")]
     gyroid.check_lipschitz(samples=4000)
@@ -44,6 +48,7 @@ def main():
         report = packing.verify()
         print(f"{name:11s} {len(packing.radii):6d} spheres  fill {packing.fill:.4f}  "
               f"largest r {packing.radii.max():.4f}  {time.perf_counter() - started:6.1f} s  valid: {report.ok}")
+        print(f"wrote {packing.save(out / f'gyroid_{name}.npz')}")
 
 
 if __name__ == "__main__":

@@ -5,8 +5,9 @@ The profile is a manifold3d cross-section whose corners are rounded by offsettin
 takes the manifold3d solid directly and mixes it with its own shapes (here: a half-space that
 trims the top).
 
-    python examples/manifold_part.py                     # 10,000 spheres, picture in docs/img
-    python examples/manifold_part.py -n 500 --out /tmp/part.png
+    python examples/manifold_part.py                     # 10,000 spheres, picture into ./out
+    python examples/manifold_part.py --out docs/img      # the picture of docs/meshes.md
+    python examples/manifold_part.py -n 500 --backend numpy --out /tmp/part
 """
 
 import argparse
@@ -34,8 +35,10 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("-n", type=int, default=10_000, help="spheres to pack")
     parser.add_argument("--backend", default=None, help="backend (default: the fastest here)")
-    parser.add_argument("--out", default=str(Path(__file__).parent.parent / "docs" / "img" / "manifold_part.png"))
+    parser.add_argument("--out", default="out", help="output folder (default ./out)")
     args = parser.parse_args()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
 
     solid = part()
     trimmed = solid - nd.HalfSpace([0, 0, -1], -1.4)  # remove z > 1.4: a manifold3d solid minus an ndpack shape
@@ -45,8 +48,7 @@ def main():
     report = packing.verify()
     print(f"{len(packing.radii)} spheres, fill {packing.fill:.4f}, {elapsed:.1f} s "
           f"({packing.params['backend']}), valid: {report.ok}")
-    draw(packing, args.out)
-    print(f"picture: {args.out}")
+    print(f"wrote {draw(packing, out / 'manifold_part.png')}")
 
 
 def draw(packing, path):
@@ -57,13 +59,14 @@ def draw(packing, path):
     import matplotlib.pyplot as plt
 
     figure, (top, side) = plt.subplots(1, 2, figsize=(13, 4.4), gridspec_kw={"width_ratios": [1.15, 1]})
-    packing.plot(ax=top, at=[0, 0, 0.7])
+    packing.plot(ax=top, axes=(0, 1), at=[0, 0, 0.7])
     top.set_title(f"{len(packing.radii):,} spheres, fill {packing.fill:.3f}: slice z = 0.7")
     packing.plot(ax=side, axes=(0, 2), at=[0, 2.8, 0])
     side.set_title("slice y = 2.8, through the pocket")
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     plt.close(figure)
+    return path
 
 
 if __name__ == "__main__":

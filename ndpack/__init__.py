@@ -25,17 +25,18 @@ from .errors import (
     RepairWarning,
     ShapeError,
 )
-from .covering import CoverReport, Covering, check_covering, cover
-from .many import ManyResult, pack_many
+from .drivers.collision.covering import CoverReport, Covering, check_covering, cover
+from .scale.many import ManyResult, pack_many
 from .oracle import Oracle, Volume, ball_volume
 from .packing import Packing, RoundStats
-from .protosphere import Round, pack, pack_sizes
-from .rotation import rotation
-from .sizes import SizeDistribution, SizeReport
-from .tiled import pack_tiled
+from .drivers.greedy.protosphere import Round, pack, pack_sizes
+from .geometry.rotation import rotation
+from .drivers.sizes import SizeDistribution, SizeReport
+from .scale.tiled import pack_tiled
 from .shapes import *  # noqa: F403  (the shape classes, listed in shapes.__all__)
 from .shapes import __all__ as _shape_names
 from .verify import Verification, verify
+from . import io, pictures  # noqa: F401  (they register Packing.save, Packing.load and Packing.plot)
 
 __version__ = "0.1.0"
 

@@ -192,11 +192,12 @@ def _share(text: str) -> float:
 
 
 def _parser() -> argparse.ArgumentParser:
-    from .named_shapes import BUILTIN
-    from .covering import CHECK_SAMPLES, DEFAULT_SAMPLES, MAX_SPHERES
+    from .io.named_shapes import BUILTIN
+    from .drivers.collision.covering import CHECK_SAMPLES, DEFAULT_SAMPLES
+    from .drivers.collision.estimate import MAX_SPHERES
     from .io import table
     from .pictures.view import UP_CHOICES
-    from .protosphere import AUTO_FAST_ABOVE
+    from .drivers.greedy.protosphere import AUTO_FAST_ABOVE
 
     parser = argparse.ArgumentParser(
         prog="ndpack",
@@ -319,8 +320,9 @@ def _parser() -> argparse.ArgumentParser:
     render.add_argument("--size", type=_size, help="WIDTHxHEIGHT of a shaded render (default 900x900)")
     render.add_argument("--up", choices=UP_CHOICES,
                         help="the axis that points up on screen (-y: y pointing down). auto "
-                        "(default): the mesh file's convention (.obj, .gltf, .glb: y; .stl, .3mf: z), else the "
-                        "longest extent when clearly longest, else z; a slice shows it vertical")
+                        "(default): the axis it stands on its broadest base along, with the centre of mass above "
+                        "it (ties: the mesh file's convention, .obj/.gltf/.glb y, .stl/.3mf z); no base: the "
+                        "convention, else a clearly longest extent, else z; a slice shows it vertical")
     render.add_argument("--view", type=_numbers, metavar="AZIMUTH,ELEVATION",
                         help="AZIMUTH,ELEVATION in degrees (default 35,25): the camera turns about the up axis, "
                         "and rises above the plane across it")
@@ -364,9 +366,9 @@ def _plus_minus(error: float) -> str:
 
 def _pack(args) -> int:
     from .packing import repair_summary
-    from .protosphere import pack
+    from .drivers.greedy.protosphere import pack
     from .shapes.mesh import mesh_notes
-    from .shape_sources import describe, load_shape
+    from .io.shape_sources import describe, load_shape
 
     shapes, many = _expand_shapes(args.shape)
     if many or len(shapes) > 1 or (args.output and _is_folder(args.output)):
@@ -448,7 +450,7 @@ def _tiles(text: str):
 
 def _pack_tiled(args):
     """``nd.pack_tiled`` with ``--tiles`` and ``--workers``, after refusing the options it does not take."""
-    from .tiled import pack_tiled
+    from .scale.tiled import pack_tiled
 
     refused = [name for name, given in (("--max-radius", args.max_radius is not None), ("--fill", args.fill),
                                         ("--time", args.time_budget), ("--batch", args.batch != 1),
@@ -508,9 +510,9 @@ def _is_folder(output: str) -> bool:
 
 
 def _pack_many(args, shapes: list[str]) -> int:
-    """``ndpack pack`` of several shapes: each part through :func:`~ndpack.many.pack_many`, to a folder."""
-    from .many import pack_many
-    from .shape_sources import is_mesh_file
+    """``ndpack pack`` of several shapes: each part through :func:`~ndpack.scale.many.pack_many`, to a folder."""
+    from .scale.many import pack_many
+    from .io.shape_sources import is_mesh_file
 
     if args.output and not _is_folder(args.output):
         raise ParameterError(f"{len(shapes)} shapes are written to a folder, one file each: give -o a folder "
@@ -607,8 +609,9 @@ def _cover(args) -> int:
         return _cover_robot(args)
     if args.package:
         raise ParameterError("--package applies to a URDF's meshes, and the shape is not a .urdf file: leave it out")
-    from .covering import TooManySpheres, cover
-    from .shape_sources import describe, load_shape
+    from .drivers.collision.covering import cover
+    from .drivers.collision.estimate import TooManySpheres
+    from .io.shape_sources import describe, load_shape
 
     source = _with_dim(args.shape, args.dim)
     shape = load_shape(source, args.holes, args.sign)
@@ -663,8 +666,8 @@ def _too_many(error, args, count: str) -> ParameterError:
 
 
 def _cover_robot(args) -> int:
-    from .covering import TooManySpheres
-    from .robots import cover_urdf
+    from .drivers.collision.estimate import TooManySpheres
+    from .drivers.collision.robots import cover_urdf
 
     if args.format or args.option:
         raise ParameterError("--format and --option apply to one shape's file; a URDF's spheres go to a folder "
@@ -714,7 +717,7 @@ def _recorded_shape(packing, override: str | None, required: bool, trust: bool =
     it was packed) unless ``holes`` is given, and so with ``sign``. With ``period`` the shape is
     made periodic along the axes whose period the packing records."""
     from .io.limits import printable
-    from .shape_sources import code_in, is_mesh_file, load_shape
+    from .io.shape_sources import code_in, is_mesh_file, load_shape
 
     if override:  # each dimension is compared before the shape is built: a file may name box:dim=1000000000
         shape = load_shape(override, holes, sign, dim=packing.dim)
@@ -818,7 +821,7 @@ def _verify(args) -> int:
 def _verify_covering(args, packing, shape) -> int:
     """A covering's spheres overlap and reach outside: check that they cover the shape, and reach
     out no farther than asked."""
-    from .covering import check_covering
+    from .drivers.collision.covering import check_covering
 
     if args.tol is not None or args.independent:
         raise ParameterError("--tol and --independent apply to packings; this file holds a covering (its spheres "

@@ -132,6 +132,8 @@ class Oracle:
     convex: bool = False
     #: Whether the shape has no scalar kernel, so runs on the NumPy backend alone (a NumPy plug-in).
     numpy_only: bool = False
+    #: Whether the shape is the empty set (:class:`ndpack.shapes.empty.Empty`, whose ``reason`` says why).
+    is_empty_set: bool = False
     _bounds: np.ndarray
 
     # ------------------------------------------------------------------ the protocol
@@ -259,109 +261,52 @@ class Oracle:
         return f"{type(self).__name__}(dim={self.dim})"
 
     # ------------------------------------------------------------------ CSG
-    # Operands may be other libraries' shapes (manifold3d, trimesh, shapely): see as_oracle. An
-    # empty part (ndpack.shapes.empty) is left out as the tree is built: a - empty is a, a & empty
-    # is empty, so no node holds one.
-    # The node classes subclass Oracle (their modules import this one), so the operators import them when called.
+    # Operands may be other libraries' shapes (manifold3d, trimesh, shapely): see as_oracle. The
+    # shapes these methods build subclass Oracle, so their modules register them in OPERATIONS
+    # (below) when imported, and this module imports none of them.
     def union(self, *others: Oracle) -> Oracle:
-        from .shapes.csg import Union
-        from .shapes.empty import Empty, Everything
-
-        parts = _parts(self, others)  # self is neither Empty nor Everything: they have their own
-        for part in parts:
-            if isinstance(part, Everything):
-                return part
-        kept = [part for part in parts if not isinstance(part, Empty)]
-        return kept[0] if len(kept) == 1 else Union(*kept)
+        return _operation("union")(self, *others)
 
     def intersection(self, *others: Oracle) -> Oracle:
-        from .shapes.csg import Intersection, common_box
-        from .shapes.empty import Empty, Everything
-
-        parts = _parts(self, others)
-        for part in parts:
-            if isinstance(part, Empty):
-                return part
-        kept = [part for part in parts if not isinstance(part, Everything)]
-        if len(kept) == 1:
-            return kept[0]
-        if common_box(kept) is None:
-            return Empty(self.dim, f"the intersection of {', '.join(map(repr, kept))} is empty: their bounding "
-                                   "boxes do not overlap")
-        return Intersection(*kept)
+        return _operation("intersection")(self, *others)
 
     def difference(self, *others: Oracle) -> Oracle:
-        from .shapes.csg import Difference
-        from .shapes.empty import Empty, Everything
-
-        result = self
-        for other in _parts(self, others)[1:]:
-            if isinstance(result, Empty) or isinstance(other, Empty):
-                continue
-            if isinstance(other, Everything):
-                result = Empty(self.dim, f"{result!r} less all of space ({other.reason})")
-            else:
-                result = Difference(result, other)
-        return result
+        return _operation("difference")(self, *others)
 
     def __ror__(self, other) -> Oracle:
-        from .shapes.adapters import as_oracle
-
-        return as_oracle(other).union(self)
+        return _operation("as_oracle")(other).union(self)
 
     def __rand__(self, other) -> Oracle:
-        from .shapes.adapters import as_oracle
-
-        return as_oracle(other).intersection(self)
+        return _operation("as_oracle")(other).intersection(self)
 
     def __rsub__(self, other) -> Oracle:
-        from .shapes.adapters import as_oracle
-
-        return as_oracle(other).difference(self)
+        return _operation("as_oracle")(other).difference(self)
 
     def complement(self) -> Oracle:
-        from .shapes.csg import Complement
-
-        return Complement(self)
+        return _operation("complement")(self)
 
     def translate(self, offset) -> Oracle:
-        from .shapes.csg import Translate
-
-        return Translate(self, offset)
+        return _operation("translate")(self, offset)
 
     def rotate(self, matrix, center=None) -> Oracle:
         """Rotate (or reflect) by an orthogonal ``(dim, dim)`` matrix about ``center`` (default origin)."""
-        from .shapes.csg import Rotate
-
-        return Rotate(self, matrix, center)
+        return _operation("rotate")(self, matrix, center)
 
     def scale_by(self, factor: float, center=None) -> Oracle:
         """Scale uniformly by ``factor`` about ``center`` (default origin)."""
-        from .shapes.csg import Scale
-
-        return Scale(self, factor, center)
+        return _operation("scale_by")(self, factor, center)
 
     def offset(self, amount: float) -> Oracle:
         """Dilate by ``amount`` (> 0) or erode by ``-amount`` (< 0)."""
-        from .shapes.csg import Offset
-
-        return Offset(self, amount)
+        return _operation("offset")(self, amount)
 
     def shell(self, thickness: float) -> Oracle:
         """The layer of the given thickness centred on the boundary."""
-        from .shapes.csg import Shell
-
-        return Shell(self, thickness)
+        return _operation("shell")(self, thickness)
 
     def smooth_union(self, other: Oracle, blend: float) -> Oracle:
         """Union with a fillet of width ``blend``; its distance is a lower bound."""
-        from .shapes.csg import SmoothUnion
-        from .shapes.empty import is_special
-
-        other = _parts(self, (other,))[1]
-        if is_special(other):  # nothing to blend with: the union alone
-            return self.union(other)
-        return SmoothUnion(self, other, blend)
+        return _operation("smooth_union")(self, other, blend)
 
     # Through the methods, so that a subclass's own (the empty set's) serve the operators too.
     def __or__(self, other) -> Oracle:
@@ -407,11 +352,34 @@ def monte_carlo_volume(oracle: Oracle, samples: int, seed: int) -> Volume:
     return Volume(box_volume * fraction, error)
 
 
-def _parts(shape: Oracle, others) -> list:
-    """``shape`` and ``others`` as ndpack shapes (other libraries' converted), of one dimension."""
-    from .shapes.adapters import as_oracle
+#: What an Oracle's CSG methods and operators build, by name: ``"union"``, ``"intersection"``,
+#: ``"difference"``, ``"complement"``, ``"translate"``, ``"rotate"``, ``"scale_by"``,
+#: ``"offset"``, ``"shell"``, ``"smooth_union"`` (:mod:`ndpack.shapes.csg`) and ``"as_oracle"``
+#: (another library's shape as an ndpack one, :mod:`ndpack.shapes.adapters`). Those modules
+#: register their functions (:func:`operation`) when imported, and ``import ndpack`` imports
+#: them: the shapes they build subclass Oracle, so this module cannot import them (fogleman/sdf's
+#: operators register themselves the same way).
+OPERATIONS: dict = {}
 
-    parts = [shape, *map(as_oracle, others)]
+
+def operation(name: str):
+    """Decorator: register a function as the operation ``name`` of :data:`OPERATIONS`."""
+    def register(function):
+        OPERATIONS[name] = function
+        return function
+    return register
+
+
+def _operation(name: str):
+    try:
+        return OPERATIONS[name]
+    except KeyError:  # only where the package's __init__ did not run, which Python never skips
+        raise RuntimeError(f"no shape operation {name!r} is registered: import ndpack first") from None
+
+
+def parts(shape: Oracle, others) -> list:
+    """``shape`` and ``others`` as ndpack shapes (other libraries' converted), of one dimension."""
+    parts = [shape, *map(_operation("as_oracle"), others)]
     check_compatible(*parts)
     return parts
 
@@ -437,11 +405,9 @@ def check_packable(shape: Oracle, samples_per_face: int = 512, seed: int = 0) ->
     The bounds are checked by sampling each face of the bounding box: no face point may lie
     strictly inside the shape (beyond a relative tolerance of 1e-9).
     """
-    from .shapes.empty import Empty
-
     if not isinstance(shape, Oracle):
         check_compatible(shape)
-    if isinstance(shape, Empty):
+    if shape.is_empty_set:
         raise ShapeError(f"there is nothing to pack: {shape.reason}")
     bounds = shape.bounds
     if bounds.shape != (2, shape.dim):

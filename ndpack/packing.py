@@ -16,6 +16,20 @@ from .verify import verify
 #: Bumped when the file layout changes; load() refuses files from the future.
 FORMAT_VERSION = 1
 
+#: What saves, loads and draws a packing: ``"save"``, ``"load"`` (:mod:`ndpack.io`) and ``"plot"``
+#: (:mod:`ndpack.pictures`), registered by those packages when they are imported (``import
+#: ndpack`` imports both). They build on this module, so it imports neither: a registry, as
+#: trimesh's exchange registers its formats.
+SERVICES: dict = {}
+
+
+def service(name: str):
+    """The function registered as ``name`` in :data:`SERVICES`."""
+    try:
+        return SERVICES[name]
+    except KeyError:  # only where the package's __init__ did not run, which Python never skips
+        raise RuntimeError(f"no {name}() is registered: import ndpack first") from None
+
 
 @dataclass
 class RoundStats:
@@ -120,9 +134,7 @@ class Packing:
 
     def plot(self, shape=None, ax=None, axes=None, at=None, up="auto"):
         """Draw the packing (2-D) or a slice of it; see :func:`ndpack.pictures.plot`."""
-        from .pictures import plot
-
-        return plot(self, shape, ax=ax, axes=axes, at=at, up=up)
+        return service("plot")(self, shape, ax=ax, axes=axes, at=at, up=up)
 
     def replace_spheres(self, centers, radii, rounds) -> Packing:
         """A copy with other spheres and everything else kept."""
@@ -150,16 +162,12 @@ class Packing:
         others (``.ply``, ``.vtp``, ``.obj``/``.stl``/``.glb``, ``.sph``, ``format="curobo"``,
         ``format="medial"``) and their ``options`` are listed by :func:`ndpack.io.table`.
         """
-        from .io import save
-
-        return save(self, path, format, **options)
+        return service("save")(self, path, format, **options)
 
     @classmethod
     def load(cls, path, format: str | None = None) -> Packing:
         """Read a packing written by :meth:`save` (any format but ``medial``)."""
-        from .io import load
-
-        return load(path, format)
+        return service("load")(path, format)
 
 
 def repair_summary(repair: dict) -> str:

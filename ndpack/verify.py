@@ -21,11 +21,11 @@ from scipy.spatial import cKDTree
 
 from .errors import DimensionError, NdpackError, ParameterError
 from .oracle import as_points
-from .period import period_of
+from .geometry.period import period_of
 from .shapes.adapters import as_oracle
 
 #: Default tolerance, as a fraction of the shape's scale: float64 rounding of distances is about
-#: 1e-16 of it, and the driver keeps a margin of 1e-10 (ndpack.protosphere.SAFETY_MARGIN).
+#: 1e-16 of it, and the driver keeps a margin of 1e-10 (ndpack.drivers.greedy.protosphere.SAFETY_MARGIN).
 DEFAULT_TOLERANCE = 1e-12
 #: Points per sphere of the independent check: a few dozen find a sphere that reaches through a
 #: hole by a fraction of its radius.
@@ -137,7 +137,7 @@ def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0, 
     radii : (n,) float64, positive
     tol : float
     period : Period, optional
-        A periodic domain (:class:`~ndpack.period.Period`): spheres overlap where any images of
+        A periodic domain (:class:`~ndpack.geometry.period.Period`): spheres overlap where any images of
         them do, and a sphere wider than a period overlaps its own image (a pair ``(i, i)``).
 
     Returns
@@ -149,7 +149,7 @@ def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0, 
     """
     if len(radii) < 2 and period is None:
         return np.zeros((0, 2), dtype=np.int64), -np.inf
-    # In a periodic domain the trees wrap: one frame for all of them (ndpack.period).
+    # In a periodic domain the trees wrap: one frame for all of them (ndpack.geometry.period).
     points, boxsize = centers, None
     if period is not None:
         points, boxsize = period.frame(centers, 2 * radii.max() + tol)

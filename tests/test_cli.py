@@ -36,7 +36,7 @@ def test_bad_shape_spec_gives_one_line_and_nonzero_exit():
     result = run("pack", "box:dim")
     assert result.returncode == 2 and "key=value" in result.stderr
     # A parameter the shape does not take: named, with the ones it does take.
-    from ndpack.named_shapes import from_spec
+    from ndpack.io.named_shapes import from_spec
 
     with pytest.raises(nd.NdpackError, match=r"does not take size; it takes dim=3"):
         from_spec("box:dim=3,size=2")

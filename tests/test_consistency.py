@@ -6,7 +6,7 @@ import pytest
 import ndpack as nd
 from ndpack.consistency import steep_spheres, volume_problem
 from ndpack.oracle import Volume
-from ndpack.protosphere import _ensure_valid
+from ndpack.drivers.greedy.protosphere import _ensure_valid
 
 HOLE_CENTER, HOLE_RADIUS, STEEP_BAND = np.array([0.3, 0.0]), 0.01, 0.01
 
@@ -102,7 +102,8 @@ def test_a_wrong_volume_fails_a_real_run_and_keeps_its_spheres(monkeypatch):
 
 
 def test_the_command_line_keeps_an_invalid_packing_and_flags_an_impossible_file(tmp_path, monkeypatch, capsys):
-    from ndpack import cli, shape_sources
+    from ndpack import cli
+    from ndpack.io import shape_sources
 
     holed = holed_disc()
     holed._slope_checked = True

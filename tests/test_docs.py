@@ -53,7 +53,7 @@ def _small_pack(shape, n=1000, **options):
 
 
 ndpack.pack = _small_pack
-ndpack.protosphere.pack = _small_pack  # what `ndpack pack` calls
+ndpack.drivers.greedy.protosphere.pack = _small_pack  # what `ndpack pack` calls
 _CAPPED = [True]  # console blocks run uncapped: their printed figures are the real ones
 
 _pack_sizes = ndpack.pack_sizes
@@ -77,10 +77,11 @@ def _small_cover(shape, *args, **options):  # coverings on fewer samples (their 
 
 
 ndpack.cover = _small_cover
-ndpack.covering.cover = _small_cover  # what `ndpack cover` calls
+ndpack.drivers.collision.covering.cover = _small_cover  # what `ndpack cover` calls
 
-import ndpack.sphere_tree
-ndpack.sphere_tree.covering_tree = functools.partial(ndpack.sphere_tree.covering_tree, samples=2000)
+import ndpack.drivers.collision.sphere_tree
+_trees = ndpack.drivers.collision.sphere_tree
+_trees.covering_tree = functools.partial(_trees.covering_tree, samples=2000)
 
 """
 

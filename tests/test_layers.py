@@ -16,31 +16,28 @@ PACKAGE = Path(__file__).resolve().parents[1] / "ndpack"
 
 #: Bottom to top: a module may import from its own layer or any layer below it.
 LAYERS = (
-    ("base", ("ndpack.errors", "ndpack.log", "ndpack.period", "ndpack.rotation", "ndpack.reproducible",
-              "ndpack.conflicts", "ndpack.ball_union", "ndpack.workers")),
+    # Errors, notices, machine-independent arithmetic, and geometry with no shape in it.
+    ("base", ("ndpack.errors", "ndpack.log", "ndpack.reproducible", "ndpack.geometry")),
     # The scalar-kernel language, programs, the tape, the library, compiling, compiled_program.
     ("kernels", ("ndpack.kernels",)),
     ("meshes", ("ndpack.meshes",)),
     ("shapes", ("ndpack.oracle", "ndpack.shapes")),
     ("backends", ("ndpack.backends",)),
-    ("driver", ("ndpack.protosphere", "ndpack.rounds", "ndpack.consistency", "ndpack.verify", "ndpack.sizes",
-                "ndpack.boundary", "ndpack.inside_cells", "ndpack.covering", "ndpack.sphere_tree",
-                "ndpack.packing", "ndpack.tiled")),
-    # Files, pictures, robots, named shapes and shape sources: ndpack and the world outside.
-    ("outside", ("ndpack.io", "ndpack.pictures", "ndpack.robots", "ndpack.named_shapes", "ndpack.shape_sources",
-                 "ndpack.samples", "ndpack.many")),
+    # The result and its checks.
+    ("results", ("ndpack.packing", "ndpack.verify", "ndpack.consistency")),
+    # Files (named shapes and shape sources among them), pictures and sample files.
+    ("outside", ("ndpack.io", "ndpack.pictures", "ndpack.samples")),
+    # The packing drivers: greedy, sizes, collision (coverings).
+    ("drivers", ("ndpack.drivers",)),
+    # Many parts, tiles, and where their tasks run.
+    ("scale", ("ndpack.scale",)),
     ("top", ("ndpack.cli", "ndpack")),
 )
 
-#: Upward imports allowed inside a function only: a result object's convenience method that
-#: imports the upper layer lazily (the pandas DataFrame.plot / to_csv pattern).
-ALLOWED_UPWARD = {
-    # Packing.save / Packing.load / Packing.plot: a packing saves and draws itself.
-    ("ndpack.packing", "ndpack.io"): "Packing.save, Packing.load",
-    ("ndpack.packing", "ndpack.pictures"): "Packing.plot",
-    # Covering.save: a covering writes its spheres in every sphere format.
-    ("ndpack.covering", "ndpack.io"): "Covering.save",
-}
+#: Upward imports allowed inside a function only: none. A lower module that needs a higher one's
+#: service holds a registry the higher one fills when imported (``Packing.save`` from ndpack.io,
+#: ``Oracle.union`` from ndpack.shapes.csg), as trimesh's exchange and fogleman/sdf's operators do.
+ALLOWED_UPWARD = {}
 
 _PLACE = {prefix: number for number, (_, prefixes) in enumerate(LAYERS) for prefix in prefixes}
 
@@ -157,4 +154,57 @@ def test_the_table_places_by_prefix(module, expected):
 def test_the_walk_sees_local_and_relative_imports():
     found = {(target, local) for target, _, local in imports("ndpack.oracle")}
     assert ("ndpack.errors", False) in found  # from .errors import ...
-    assert ("ndpack.shapes.csg", True) in found  # inside the operators
+    found = {(target, local) for target, _, local in imports("ndpack.cli")}
+    assert ("ndpack.drivers.greedy.protosphere", True) in found  # inside a command's function
+
+
+def _circles(graph: dict) -> list[list[str]]:
+    """The strongly connected groups of more than one module in ``graph`` (module -> modules it
+    imports): each a circle of imports (Tarjan's algorithm, iterative)."""
+    index, low, stack, on_stack, found, counter = {}, {}, [], set(), [], 0
+    for root in graph:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = counter
+        counter += 1
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, targets = work[-1]
+            for target in targets:
+                if target not in index:
+                    index[target] = low[target] = counter
+                    counter += 1
+                    stack.append(target)
+                    on_stack.add(target)
+                    work.append((target, iter(sorted(graph[target]))))
+                    break
+                if target in on_stack:
+                    low[node] = min(low[node], index[target])
+            else:
+                work.pop()
+                if work:
+                    low[work[-1][0]] = min(low[work[-1][0]], low[node])
+                if low[node] == index[node]:
+                    group = []
+                    while True:
+                        member = stack.pop()
+                        on_stack.discard(member)
+                        group.append(member)
+                        if member == node:
+                            break
+                    if len(group) > 1:
+                        found.append(sorted(group))
+    return found
+
+
+def test_no_circle_of_imports_anywhere_in_the_text():
+    """No module imports one that imports it back, directly or around a circle, counting imports
+    inside functions: a lower module that needs a higher one holds a registry (issue 46)."""
+    graph = {module: {target for target, _, _ in imports(module) if target in MODULES and target != module}
+             for module in MODULES}
+    circles = _circles(graph)
+    assert not circles, "modules in circles of imports:\n" + "\n".join(", ".join(group) for group in circles)
+    # The check finds one: a circle made on purpose.
+    assert _circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]

@@ -6,7 +6,8 @@ import pytest
 import ndpack as nd
 from ndpack.backends.numba_backend import INDEX_NEW_SPHERES, NumbaBackend
 from ndpack.backends.numpy_backend import NumpyBackend
-from ndpack.conflicts import disjoint_greedy, greedy_over_pairs
+from ndpack.drivers.greedy.conflicts import disjoint_greedy, greedy_over_pairs
+from ndpack.drivers.greedy.protosphere import cooling_schedule
 
 REFERENCE = NumpyBackend()
 
@@ -75,7 +76,7 @@ def test_walls_spare_evaluations_without_changing_results(shape):
     radii = np.full(60, 0.05)
     wall = -shape._distance(0.5 * (lower + upper)) - 1e-9
     neighbours = REFERENCE.near_spheres(lower, upper, np.full(500, 10.0), centers, radii)
-    steps = nd.protosphere.cooling_schedule(30)
+    steps = cooling_schedule(30)
     starts = lower + 0.1 * rng.random((3, 500, dim))
     backend = NumbaBackend()
     plain = backend.converge(shape, points, lower, upper, centers, radii, neighbours, steps, starts=starts)
@@ -110,7 +111,7 @@ def test_candidates_in_one_gap_are_decided_without_listing_their_pairs(monkeypat
     """A 12-D ball on a grid of 2: every one of its 4,096 cells' prototypes finds the centre, and
     the conflict check listed all 8.4 million pairs among them (5.5 s, 1.6 GB) for one sphere.
     The work is bounded here by the pairs of spheres that meet it decides over, not by the time."""
-    import ndpack.conflicts as conflicts
+    import ndpack.drivers.greedy.conflicts as conflicts
 
     compared = []
     greedy = conflicts.greedy_over_pairs
@@ -209,7 +210,7 @@ def test_fast_mode_finds_the_exact_cube_radii(dim):
 def test_fast_mode_polishes_only_the_candidates_it_keeps(monkeypatch):
     # A candidate that a larger one blocks is touched by that sphere and converges again, so
     # polishing it is lost: the polish goes to the chosen ones (a few passes may add some).
-    from ndpack.protosphere import RunState
+    from ndpack.drivers.greedy.protosphere import RunState
 
     polished = []
     original = RunState.polish

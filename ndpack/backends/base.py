@@ -1,7 +1,7 @@
 """The small interface between the packing driver and the code that runs its hot loops.
 
 A backend sees plain arrays and an oracle; it holds no packing state. The driver
-(:mod:`ndpack.protosphere`) decides what to move, what to insert and when to stop; the backend
+(:mod:`ndpack.drivers.greedy.protosphere`) decides what to move, what to insert and when to stop; the backend
 moves prototypes, measures clearances and finds the spheres near a box. Subclasses import their
 framework lazily and raise :class:`~ndpack.errors.BackendError` with an install hint when it is
 missing.

@@ -53,6 +53,9 @@ from .medial import load_medial
 from .mesh import sphere_mesh, spheres_from_mesh
 from .metadata import metadata
 from .sph import read_sph
+from ..packing import SERVICES
+
+SERVICES.update(save=save, load=load)  # Packing.save and Packing.load (a packing saves itself)
 
 __all__ = [
     "Format", "FORMATS", "SUFFIXES", "save", "check", "load", "load_medial", "names", "table", "sphere_mesh",

@@ -1,9 +1,9 @@
 """Sphere trees (``sph``, ``.sph``, 3-D): Bradshaw & O'Sullivan's sphere-tree toolkit's text format.
 
 A packing is written as a tree of two levels: a root that encloses every sphere
-(:func:`ndpack.ball_union.enclosing_sphere`), then the spheres. :func:`read_sph` reads any level
+(:func:`ndpack.geometry.ball_union.enclosing_sphere`), then the spheres. :func:`read_sph` reads any level
 of any such file, the toolkit's own among them; :func:`~ndpack.io.load` reads the deepest.
-(:meth:`ndpack.sphere_tree.SphereTree.save` writes deeper trees in the same format.)
+(:meth:`ndpack.drivers.collision.sphere_tree.SphereTree.save` writes deeper trees in the same format.)
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..ball_union import enclosing_sphere
+from ..geometry.ball_union import enclosing_sphere
 from ..errors import NdpackError
 from ..packing import Packing
 from .metadata import packing_from
@@ -34,7 +34,7 @@ def _write_sph(packing: Packing, path: Path) -> None:
     writes its nodes' occupancy as the fifth column, 1 for a node it has not refined, and reads
     only the first four. An empty packing is ``2 1`` with two unused slots of radius 0 (the
     toolkit marks unused slots by a radius <= 0). The root is
-    :func:`~ndpack.ball_union.enclosing_sphere` of the spheres: it encloses every sphere, within
+    :func:`~ndpack.geometry.ball_union.enclosing_sphere` of the spheres: it encloses every sphere, within
     about 1% of the smallest that does. Numbers are written with 17 significant digits, so a
     read-back is exact.
     """

@@ -44,11 +44,15 @@ def plot(packing, shape=None, ax=None, axes=None, at=None, cmap="viridis", outli
     """Draw a packing (2-D) or a slice of it (any dimension); returns the Matplotlib ``Axes``.
 
     Circles are coloured by the radius of their sphere (on a log scale when the radii span more
-    than 10x); the shape's outline in the plane is drawn from its distance field when the shape
-    is known (a packing loaded from a file has none: pass ``shape=`` or go without).
+    than 10x); the shape's outline in the plane is drawn where the shape is known: a triangle
+    mesh's as its exact section (trimesh), any other shape's as the zero contour of its
+    distance. A packing loaded from a file has no shape: pass ``shape=``, or it draws the mesh
+    file it records (``params["source"]``, what ``ndpack pack`` writes) where that file is there.
 
     Parameters
     ----------
+    shape : Oracle or trimesh.Trimesh, optional
+        Whose outline to draw; default the packing's shape.
     axes : (int, int), optional
         The horizontal and vertical axes of the plane. Default: (0, 1), except in 3-D, where
         the plane through ``at`` holds the up axis (vertical) and the first other of x, y, z.
@@ -57,7 +61,7 @@ def plot(packing, shape=None, ax=None, axes=None, at=None, cmap="viridis", outli
     rasterized : bool, optional
         Draw the circles as an image inside vector output (SVG, PDF); default: above
         :data:`RASTERIZE_ABOVE` circles. The outline, axes and text stay vector.
-    up : str
+    up : str or Up
         Which axis points up, as in :func:`ndpack.pictures.render`: ``"auto"`` (default: from
         the shape, :func:`ndpack.pictures.view.choose_up`; the second of ``axes`` when they are
         given), ``"x"``, ``"y"``, ``"z"``, or ``"-x"``, ``"-y"``, ``"-z"`` (pointing down).
@@ -75,6 +79,8 @@ def plot(packing, shape=None, ax=None, axes=None, at=None, cmap="viridis", outli
     chosen = choose_up(packing, up, axes)
     axes = plane_axes(chosen, axes)
     shape = packing.shape if shape is None else shape
+    if shape is None and outline and packing.dim == 3:
+        shape = recorded_mesh(packing)
     centers2, radii2, index = slice_circles(packing.centers, packing.radii, axes, at)
     if ax is None:
         _, ax = plt.subplots(figsize=(6, 6))
@@ -254,7 +260,8 @@ def _figure_path(path):
 
 
 def draw_outline(ax, shape, axes, at, lower, upper, resolution=400):
-    """Draw the shape's outline on a plane: the zero contour of its distance, sampled on a grid.
+    """Draw the shape's outline on a plane: a triangle mesh's section (:func:`draw_section`),
+    else the zero contour of its distance, sampled on a grid.
 
     Parameters
     ----------
@@ -269,6 +276,9 @@ def draw_outline(ax, shape, axes, at, lower, upper, resolution=400):
     resolution : int
         Samples along each side.
     """
+    surface = _surface(shape)
+    if surface is not None and len(at) == 3:
+        return draw_section(ax, *surface, axes, at)
     # Sample beyond the bounds: a shape touching its bounding box still gets a closed outline.
     pad = 0.02 * (upper - lower).max()
     u = np.linspace(lower[0] - pad, upper[0] + pad, resolution)
@@ -279,3 +289,71 @@ def draw_outline(ax, shape, axes, at, lower, upper, resolution=400):
     points[:, axes[1]] = grid_v.ravel()
     distance = shape.distance(points).reshape(grid_u.shape)
     ax.contour(grid_u, grid_v, distance, levels=[0.0], colors="black", linewidths=1.0)
+
+
+def draw_section(ax, vertices, faces, axes, at):
+    """Draw where a triangle mesh meets the plane through ``at`` spanned by ``axes``: its section,
+    exact, as trimesh cuts it (``Trimesh.section``).
+
+    Parameters
+    ----------
+    ax : Axes
+    vertices : (n, 3) float64
+    faces : (m, 3) int64
+    axes : (int, int)
+        The plane's horizontal and vertical axes.
+    at : (3,) float64
+        A point of the plane.
+
+    Returns
+    -------
+    LineCollection or None
+        The section's polylines in the plane's coordinates (labelled ``"outline"``); None where
+        the plane misses the mesh.
+    """
+    import trimesh
+    from matplotlib.collections import LineCollection
+
+    normal = np.zeros(3)
+    normal[3 - axes[0] - axes[1]] = 1.0
+    section = trimesh.Trimesh(vertices, faces, process=False).section(plane_origin=np.asarray(at, dtype=np.float64),
+                                                                       plane_normal=normal)
+    if section is None:
+        return None
+    # Each entity, not each closed path (``discrete``): the section of an open mesh (a scan with
+    # holes) is open where the plane crosses a hole.
+    polylines = [entity.discrete(section.vertices)[:, list(axes)] for entity in section.entities]
+    lines = LineCollection(polylines, colors="black", linewidths=1.0, label="outline")
+    ax.add_collection(lines)
+    return lines
+
+
+def recorded_mesh(packing):
+    """The mesh file a packing records as its source (``params["source"]``), read by trimesh as a
+    surface to draw; None where it records none, or the file is not there or not a mesh."""
+    from pathlib import Path
+
+    from .view import mesh_file
+
+    found = mesh_file(packing)
+    if found is None or not Path(found).expanduser().is_file():
+        return None
+    import trimesh
+
+    try:
+        mesh = trimesh.load(Path(found).expanduser(), force="mesh")
+    except Exception:  # noqa: BLE001 - an outline is a nicety: a file trimesh cannot read draws none
+        return None
+    return mesh if isinstance(mesh, trimesh.Trimesh) and len(mesh.faces) else None
+
+
+def _surface(shape):
+    """(vertices, faces) of a triangle mesh shape (an ndpack ``TriangleMesh``, its holes capped, or a
+    ``trimesh.Trimesh``); None for any other shape."""
+    vertices, faces = getattr(shape, "vertices", None), getattr(shape, "faces", None)
+    if vertices is None or faces is None:
+        return None
+    vertices, faces = np.asarray(vertices), np.asarray(faces)
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3:
+        return None
+    return vertices, faces

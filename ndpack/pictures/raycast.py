@@ -95,11 +95,12 @@ def render(packing, path=None, size=(900, 900), view=(35.0, 25.0), cmap="viridis
     occlusion : bool
         Darken where nearer spheres surround a point (screen-space ambient occlusion): gaps,
         bores and pockets read as such.
-    up : str
+    up : str or Up
         The axis that points up on screen: ``"x"``, ``"y"``, ``"z"``, or ``"-x"``, ``"-y"``,
         ``"-z"`` (pointing down). ``"auto"`` (default): from the shape, by
-        :func:`ndpack.pictures.view.choose_up`: the mesh file's convention (OBJ and glTF y-up,
-        STL z-up), else the longest extent when it is clearly longest, else z.
+        :func:`ndpack.pictures.view.choose_up`: the packing stands on its broadest base that
+        holds its centre of mass (a flat face, its feet), else the mesh file's convention (OBJ
+        and glTF y-up, STL z-up), else the longest extent when it is clearly longest, else z.
 
     Returns
     -------

@@ -13,6 +13,7 @@ from .csg import (
     Union,
 )
 from .plugin import Function, plugin
+from . import adapters  # noqa: F401  (registers as_oracle for Oracle's operators)
 from .mesh import TriangleMesh
 from .periodic import Periodic
 from .polygon import Polygon

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ShapeError
-from ..oracle import Oracle
+from ..oracle import Oracle, operation
 from .empty import Empty
 from .mesh import TriangleMesh
 from .polygon import Polygon
@@ -74,6 +74,7 @@ def from_shapely(geometry):
     return Polygon.from_rings(rings)
 
 
+@operation("as_oracle")  # for Oracle's reflected operators: manifold - nd.Ball(...)
 def as_oracle(obj):
     """``obj`` as an ndpack shape: ndpack shapes as they are, other libraries' objects converted.
 

@@ -30,8 +30,8 @@ import numpy as np
 
 from ..errors import ShapeError
 from ..kernels import tape as ops
-from ..oracle import Oracle, as_vector, check_compatible
-from .empty import is_special
+from ..oracle import Oracle, as_vector, check_compatible, operation, parts
+from .empty import Empty, Everything, is_special
 
 INFINITE = np.inf
 
@@ -569,3 +569,61 @@ class SmoothUnion(_Node):
 
     def __repr__(self):
         return f"{self.a!r}.smooth_union({self.b!r}, {self.blend})"
+
+
+# ---------------------------------------------------------------------------------- the operations
+# What Oracle's methods and operators build (ndpack.oracle.OPERATIONS), registered here, where the
+# node classes are. An empty part is left out as the tree is built: a - empty is a, a & empty is
+# empty, so no node holds one.
+@operation("union")
+def union(shape: Oracle, *others) -> Oracle:
+    found = parts(shape, others)  # shape is neither Empty nor Everything: they have their own
+    for part in found:
+        if isinstance(part, Everything):
+            return part
+    kept = [part for part in found if not isinstance(part, Empty)]
+    return kept[0] if len(kept) == 1 else Union(*kept)
+
+
+@operation("intersection")
+def intersection(shape: Oracle, *others) -> Oracle:
+    found = parts(shape, others)
+    for part in found:
+        if isinstance(part, Empty):
+            return part
+    kept = [part for part in found if not isinstance(part, Everything)]
+    if len(kept) == 1:
+        return kept[0]
+    if common_box(kept) is None:
+        return Empty(shape.dim, f"the intersection of {', '.join(map(repr, kept))} is empty: their bounding "
+                                "boxes do not overlap")
+    return Intersection(*kept)
+
+
+@operation("difference")
+def difference(shape: Oracle, *others) -> Oracle:
+    result = shape
+    for other in parts(shape, others)[1:]:
+        if isinstance(result, Empty) or isinstance(other, Empty):
+            continue
+        if isinstance(other, Everything):
+            result = Empty(shape.dim, f"{result!r} less all of space ({other.reason})")
+        else:
+            result = Difference(result, other)
+    return result
+
+
+@operation("smooth_union")
+def smooth_union(shape: Oracle, other, blend: float) -> Oracle:
+    other = parts(shape, (other,))[1]
+    if is_special(other):  # nothing to blend with: the union alone
+        return shape.union(other)
+    return SmoothUnion(shape, other, blend)
+
+
+operation("complement")(Complement)
+operation("translate")(Translate)
+operation("rotate")(Rotate)
+operation("scale_by")(Scale)
+operation("offset")(Offset)
+operation("shell")(Shell)

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ShapeError
-from ..oracle import Oracle, _parts
+from ..oracle import Oracle, parts
 
 
 class _Special(Oracle):
@@ -60,6 +60,8 @@ class Empty(_Special):
     reason : str
         Why it is empty, in words (for the error raised where it is packed).
     """
+
+    is_empty_set = True
 
     def __init__(self, dim: int, reason: str = "the shape is empty"):
         super().__init__(dim, reason)
@@ -140,5 +142,5 @@ def is_special(shape) -> bool:
 
 def _dimension(shape, others):
     """The others as shapes (other libraries' converted), checked to share ``shape``'s dimension."""
-    return _parts(shape, others)[1:]
+    return parts(shape, others)[1:]
 

@@ -6,7 +6,7 @@ import numpy as np
 
 from ..errors import ShapeError
 from ..oracle import Oracle
-from ..period import Period
+from ..geometry.period import Period
 from .csg import _Transformed
 from .primitives import Box
 
@@ -20,7 +20,7 @@ class Periodic(_Transformed):
     extended (the distance is the shape's at the point moved to that middle): a box, or a
     cylinder along that axis, is unchanged but for the faces that wrap, which are no walls.
     Packing such a shape keeps every sphere clear of every image of every other
-    (:mod:`ndpack.period`), and no sphere wider than half the shortest period (it would meet its
+    (:mod:`ndpack.geometry.period`), and no sphere wider than half the shortest period (it would meet its
     own image). The packing records the cell (``params["bounds"]``) and the periods
     (``params["period"]``), which the DEM files write as a periodic box.
 

@@ -19,7 +19,7 @@ import ndpack as nd
 from ndpack import backends
 from ndpack.backends.restarts import Restarts
 from ndpack.errors import BackendError
-from ndpack.protosphere import cooling_schedule
+from ndpack.drivers.greedy.protosphere import cooling_schedule
 
 SIMULATED = os.environ.get("NUMBA_ENABLE_CUDASIM") == "1"
 
@@ -365,7 +365,7 @@ def test_fast_mode_polishing_ahead(name, monkeypatch):
     prototype above POLISH_AHEAD of the frontier: none is left after a round; the packing is
     valid, its fill within 0.5% of polishing only the chosen; a device store gives the host
     store's packing."""
-    from ndpack import rounds
+    from ndpack.drivers.greedy import rounds
 
     shape = nd.Box([0.0, 0.0], [1.0, 1.0]) - nd.Ball([0.3, 0.4], 0.2)
     left = []
@@ -400,7 +400,7 @@ def test_fast_round_moves_its_prototypes_in_one_call(monkeypatch):
     """After a fast round, the cells split level after level without converging in between, and
     the touched prototypes, the new ones of every level and those polished ahead move in one call
     of the store (one launch on a GPU); the packing stays valid."""
-    from ndpack import rounds
+    from ndpack.drivers.greedy import rounds
     from ndpack.backends.prototypes import HostPrototypes
 
     moves, levels = [], []

@@ -13,7 +13,7 @@ import trimesh
 
 import ndpack as nd
 from ndpack import io as ndio
-from ndpack.ball_union import enclosing_sphere
+from ndpack.geometry.ball_union import enclosing_sphere
 
 
 @pytest.fixture(scope="module")

@@ -43,7 +43,7 @@ SECONDS = 1.0
 #: point; print each one's exit status, output and time, and the peak address space (VmPeak).
 CHILD = r"""
 import contextlib, io, json, sys, time, traceback
-import matplotlib.pyplot, ndpack.cli, ndpack.io, ndpack.pictures, ndpack.shape_sources, ndpack.verify
+import matplotlib.pyplot, ndpack.cli, ndpack.io, ndpack.pictures, ndpack.io.shape_sources, ndpack.verify
 results = []
 for argv in json.loads(sys.argv[1]):
     out, err = io.StringIO(), io.StringIO()
@@ -403,7 +403,7 @@ def test_an_npz_member_must_hold_what_its_header_declares(folder, square):
 def test_a_recorded_shape_is_compared_by_dimension_before_it_is_built(folder, square, capsys):
     """A 2-D packing recording a 250-D simplex (within MAX_DIM): refused from the spec, unbuilt."""
     from ndpack.cli import main
-    from ndpack.shape_sources import load_shape, source_dim
+    from ndpack.io.shape_sources import load_shape, source_dim
 
     assert source_dim("simplex:dim=250") == 250 and source_dim("box") == 3 and source_dim("square") == 2
     assert source_dim("part.stl") == 3

@@ -1,4 +1,7 @@
-"""Pictures: slices of spheres are the right circles, and a plot draws them all."""
+"""Pictures: slices of spheres are the right circles, a plot draws them all, and a mesh's slice its
+cut outline."""
+
+from pathlib import Path
 
 import matplotlib
 
@@ -62,3 +65,37 @@ def test_a_3d_slice_stands_the_up_axis_vertical(tmp_path):
         save_figure(column(1), tmp_path / "p.svg", up="up")
     # 2-D and beyond three dimensions keep (0, 1).
     assert nd.pack(nd.Box([0, 0], [2, 1]), n=5, seed=0).plot().get_ylabel() == "x1"
+
+
+MESH = Path(__file__).resolve().parents[1] / "data" / "meshes" / "cow.ply"
+
+
+def outline_points(ax):
+    """(k, 2) points of the mesh section a slice draws (its LineCollection labelled "outline")."""
+    from matplotlib.collections import LineCollection
+
+    outlines = [c for c in ax.collections if isinstance(c, LineCollection) and c.get_label() == "outline"]
+    assert len(outlines) == 1, [type(c).__name__ for c in ax.collections]
+    return np.concatenate(outlines[0].get_segments())
+
+
+def test_a_mesh_slice_draws_the_cut_outline(tmp_path):
+    mesh = nd.TriangleMesh.load(MESH)
+    packing = nd.pack(mesh, n=100, seed=0, mode="fast", grid=12)
+    at = packing.centers.mean(axis=0)
+    ax = packing.plot()
+    horizontal, vertical = ax.get_xlabel(), ax.get_ylabel()
+    axes = [int(horizontal[1:]), int(vertical[1:])]
+    points = np.tile(at, (len(outline_points(ax)), 1))
+    points[:, axes] = outline_points(ax)
+    assert len(points) > 20  # a closed curve around the cow's body, not a few stray segments
+    # Every point of the outline lies on the surface, in the plane through the centres' mean.
+    size = np.ptp(mesh.bounds, axis=0).max()
+    assert np.abs(mesh.distance(points)).max() < 1e-9 * size
+    # Loaded from its file the packing has no shape; the mesh file it records draws the outline.
+    loaded = nd.Packing.load(packing.save(tmp_path / "cow.npz"))
+    assert loaded.shape is None
+    loaded.params["source"] = str(MESH)  # as `ndpack pack` records it
+    np.testing.assert_allclose(outline_points(loaded.plot()), outline_points(ax))
+    loaded.params["source"] = str(tmp_path / "gone.ply")  # a file no longer there: circles alone
+    assert len(loaded.plot().collections) == 1

@@ -102,7 +102,7 @@ def test_render_writes_a_png_of_the_asked_size(tmp_path):
     assert written.shape[:2] == (90, 160)
     np.testing.assert_allclose(written[:, :, :3] * 255, image, atol=1)
     assert covered(image).mean() > 0.2
-    assert picture(packing, tmp_path / "p.png", size=(64, 48)).exists()
+    assert picture(packing, tmp_path / "p.png", size=(64, 48)).path.exists()
 
 
 def test_render_of_a_2d_packing_draws_circles():
@@ -143,7 +143,7 @@ def test_2d_slice_of_a_loaded_4d_packing_without_shape(tmp_path):
 
 def test_4d_packing_from_pack_slices_with_outline(tmp_path):
     packing = nd.pack(nd.Box(np.zeros(4), np.ones(4)), n=12, seed=0)
-    path = picture(packing, tmp_path / "slice.png", kind="slice", at=np.full(4, 0.5))
+    path = picture(packing, tmp_path / "slice.png", kind="slice", at=np.full(4, 0.5)).path
     assert path.stat().st_size > 5000
 
 
@@ -151,7 +151,7 @@ def test_4d_packing_from_pack_slices_with_outline(tmp_path):
 def test_2d_pictures_are_written_as_svg_png_and_pdf(tmp_path):
     packing = nd.pack(nd.Box([0, 0], [2, 1]), n=40, seed=0)
     for suffix in (".svg", ".png", ".pdf"):
-        path = picture(packing, tmp_path / f"square{suffix}")
+        path = picture(packing, tmp_path / f"square{suffix}").path
         assert path.stat().st_size > 1000
     vector = (tmp_path / "square.svg").read_text()
     assert vector.count("<path") > 40  # 40 circles stay vector (the colour bar is an image)
@@ -186,7 +186,7 @@ def test_fill_plot_has_a_point_a_round(tmp_path):
     np.testing.assert_allclose(ax.lines[0].get_ydata(), 1 - packing.stats.fill)
     assert ax.get_yscale() == "log"
     assert save_fill_figure(packing, tmp_path / "fill.png").stat().st_size > 5000
-    assert picture(packing, tmp_path / "fill.svg", kind="fill").exists()
+    assert picture(packing, tmp_path / "fill.svg", kind="fill").path.exists()
 
 
 def test_fill_plot_needs_statistics(tmp_path):
@@ -246,9 +246,11 @@ def test_auto_up_stands_the_longest_extent_up():
         assert "longest extent" in chosen.reason
         height, width = covered_box(render(column(axis), size=(120, 120), view=(35, 0), occlusion=False))
         assert height > 3 * width  # standing, not lying
-    # Nothing clearly longest (the demo part, 2 x 1.2 x 0.8, lies flat): z, as always.
+    # Four spheres side by side lie flat on them (a base under the whole footprint, the lowest of two).
     block = spheres([[0, 0, 0], [1.0, 0, 0], [0, 0.6, 0], [1.0, 0.6, 0]], [0.4] * 4)
-    assert choose_up(block).name == "z" and "default" in choose_up(block).reason
+    assert choose_up(block).name == "z" and "stands on its base" in choose_up(block).reason
+    # No base and nothing clearly longest (one ball): z, as always.
+    assert "default" in choose_up(spheres([[0.0, 0, 0]], [1.0])).reason
     # Beyond three dimensions the third axis of the slice stands up; given axes, the last.
     assert choose_up(four_d_packing()).name == "z"
     assert choose_up(column(2), axes=(2, 0, 1)).name == "y"

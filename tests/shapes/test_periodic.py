@@ -7,15 +7,15 @@ import pytest
 
 import ndpack as nd
 from ndpack import cli
-from ndpack.period import Period
-from ndpack.sizes import SizeDistribution
+from ndpack.geometry.period import Period
+from ndpack.drivers.sizes import SizeDistribution
 from ndpack.verify import overlapping_pairs
 
-MARGIN = 1e-10  # the driver's gap between spheres (ndpack.protosphere.SAFETY_MARGIN, times the scale 1)
+MARGIN = 1e-10  # the driver's gap between spheres (ndpack.drivers.greedy.protosphere.SAFETY_MARGIN, times the scale 1)
 
 
 def worst_image_overlap(centers, radii, periodic, lengths):
-    """Independent of ndpack.period: the largest ``r_i + r_j - |c_i - (c_j + k L)|`` over every
+    """Independent of ndpack.geometry.period: the largest ``r_i + r_j - |c_i - (c_j + k L)|`` over every
     pair and every shift ``k`` in {-1, 0, 1} along the periodic axes (a sphere with its own
     images included), from every copy written out and a plain k-d tree over them."""
     from scipy.spatial import cKDTree

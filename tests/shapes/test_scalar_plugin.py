@@ -12,7 +12,7 @@ import pytest
 
 import ndpack as nd
 from ndpack import backends
-from ndpack.named_shapes import from_spec
+from ndpack.io.named_shapes import from_spec
 from ndpack.errors import BackendError, KernelError, ShapeError
 
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parents[2] / "examples"))
@@ -208,7 +208,7 @@ def test_numpy_plugin_on_a_compiled_backend_says_what_to_do():
 
 
 def test_entry_point_shapes_are_found(monkeypatch):
-    import ndpack.named_shapes as named_shapes
+    import ndpack.io.named_shapes as named_shapes
 
     entry = EntryPoint(name="ring", value="tests_ring_factory:make", group=named_shapes.ENTRY_POINT_GROUP)
     fake = type(sys)("tests_ring_factory")

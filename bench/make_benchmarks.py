@@ -1,0 +1,650 @@
+"""Write docs/benchmarks.md: today's figures, one table per kind, from the results in bench/results.
+
+    python bench/make_benchmarks.py                 # writes docs/benchmarks.md
+    python bench/make_benchmarks.py --out -         # prints it instead
+
+Every figure on the page is read from a results file here; none is typed in. Each table names the
+command that reproduces it, the machine and versions, the commit whose code it measured and its
+results file. The steps that led to these figures, with those of older code, stay in
+docs/benchmarks-history.md, written by hand. tests/test_figures.py checks that the page is what
+this script writes now, so a new results file reaches the page by a line in ``SOURCES`` and a run.
+
+The script reads JSON only (no ndpack import): it runs anywhere, whatever the package's layout.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import statistics
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+RESULTS = ROOT / "bench" / "results"
+PAGE = ROOT / "docs" / "benchmarks.md"
+#: A cell that starts with a number (not "2-D ..."): its column aligns right.
+NUMBER = re.compile(r"(> )?\d[\d.,]*(\s|$|%|\*)")
+
+
+@dataclass(frozen=True)
+class Machine:
+    hardware: str
+    python: str
+    numpy: str
+    libraries: str  # as the runs' logs give them (most results files record only Python and NumPy)
+
+
+MACHINES = {
+    "2 cores": Machine("AMD EPYC (as `/proc/cpuinfo` names it), 2 cores shared with other work, no GPU",
+                       "3.11.7", "2.4.6", "numba 0.68.1, Warp 1.19.0 (CPU)"),
+    "H100": Machine("NVIDIA H100 80GB HBM3 (driver 580.159.04), 16-core Intel Xeon host",
+                    "3.12.3", "2.4.6", "numba 0.68.0, numba-cuda 0.30.4, Warp 1.19.0"),
+    "H200": Machine("NVIDIA H200 of the same pool (driver 580.159.04), 16-core Intel Xeon host",
+                    "3.12.3", "2.4.6", "numba 0.68.0, numba-cuda 0.30.4, Warp 1.19.0"),
+}
+
+
+@dataclass(frozen=True)
+class Source:
+    machine: str
+    commit: str  # the code measured, as the history page records it; else the commit that added the file
+    command: str
+    date: str = ""  # only for files that do not record their own (``machine.date``)
+
+
+#: The file behind each table, named by hand. "Newest" cannot be read from the files alone: they
+#: record the day of their run (``machine.date``, and not all of them) but not the commit, one day
+#: holds several runs of a kind (before/after pairs, variants tried and reverted), and some files
+#: are a baseline rather than the code that shipped. So each kind's newest file is chosen here,
+#: with the commit of its code from the history page (or, where that names none, from
+#: ``git log --diff-filter=A`` of the file). A new run of a kind replaces its line.
+SOURCES = {
+    # Packing at scale, H100
+    "round_time_h100_issue20_step10c.json": Source(
+        "H100", "53b8133", "python3 bench/round_time.py --mesh armadillo.obj --count 100000 "
+        "--backends warp numba-cuda numba --versions now=. --repeats 3", "2026-11-25"),
+    "round_time_h100_cube_issue20_step7.json": Source(
+        "H100", "4ea141e", "python3 bench/round_time.py --mesh cube --count 100000 "
+        "--backends warp numba-cuda numba --versions now=. --repeats 2", "2026-11-25"),
+    "scale_million_h100_warp_issue20_step3.json": Source(
+        "H100", "d3149d8", "bash bench/gpu_issue20.sh million"),
+    "tiled_1M_h100_warp.json": Source("H100", "e7f6fee", "bash bench/gpu_issue25.sh gpu"),
+    "tiled_1M_h100_numba.json": Source("H100", "e7f6fee", "bash bench/gpu_issue25.sh cpu"),
+    "tiled_10M_h100_warp_alone.json": Source(
+        "H100", "e7f6fee", "python3 bench/tiled.py --count 10000000 --workers 8 --backend warp --device cuda:0"),
+    "tiled_10M_h100_warp_8.json": Source(
+        "H100", "e7f6fee", "python3 bench/tiled.py --count 10000000 --workers 8 --backend warp --device cuda:0 "
+        "--no-alone"),
+    "tiled_10M_h100_warp_16.json": Source(
+        "H100", "e7f6fee", "python3 bench/tiled.py --count 10000000 --workers 16 --backend warp --device cuda:0 "
+        "--no-alone"),
+    "profile_kernels_h100_issue20_step10.json": Source(
+        "H100", "53b8133", "python3 bench/profile_kernels.py --backends warp numba-cuda --mesh armadillo.obj "
+        "--count 100000", "2026-11-25"),
+    # Packing at scale, 2 cores
+    "round_time_2core_issue20_step10.json": Source(
+        "2 cores", "53b8133", "python bench/round_time.py --mesh armadillo.obj --count 100000 --backends numba "
+        "--versions now=. --repeats 3", "2026-11-25"),
+    "fast_tuning_2core_cube.json": Source(
+        "2 cores", "d3149d8", "python bench/fast_tuning.py --count 100000 --seeds 0 1 "
+        "--variants now:2e-5/1e-4/1024/0.0625"),
+    "tiled_2core.json": Source("2 cores", "355174e", "python bench/tiled.py --count 200000 --workers 1 2"),
+    "scale_million_2core.json": Source(
+        "2 cores", "5115451", "python bench/scale.py --cases cube --backends numba --box-count 1000000"),
+    "scale_nd_subdivided_2core.json": Source(
+        "2 cores", "76374f5", "python bench/scale.py --cases nd armadillo-subdivided --backends numba "
+        "--nd-count 100000 --faithful-count 0 --time-budget 500"),
+    # Other shapes and dimensions, H100 (the fifth measurement of issue 5)
+    **{f"scale_{kind}_h100_{backend}.json": Source(
+        "H100", "9aafdd1", "bash bench/gpu_extra.sh {boxes,subdivided,nd} {warp,numba-cuda}")
+       for kind in ("boxes", "subdivided", "nd") for backend in ("warp", "numba-cuda")},
+    # Modes, start-up, kernels
+    "auto_mode_2core.json": Source(
+        "2 cores", "d8f890e", "python bench/auto_mode.py --mesh ../shared/data/meshes/cow.obj --repeats 3"),
+    "compile_cache_2core_issue19.json": Source(
+        "2 cores", "e172723", "python bench/compile_cache.py", "2026-11-24"),
+    "compile_cache_h100_issue19.json": Source("H100", "e172723", "bash bench/gpu_issue19.sh start", "2026-11-24"),
+    "tape_speed_2core_issue19.json": Source(
+        "2 cores", "e172723", "python bench/tape_speed.py --backends numba warp:cpu --points 400000 "
+        "--spheres 2000 --repeats 3 --shapes demo deep mesh"),
+    "tape_speed_h100_issue19.json": Source("H100", "e172723", "bash bench/gpu_issue19.sh speed"),
+    "mesh_queries_h200.json": Source("H200", "a2d71aa", "bash bench/gpu_meshes.sh"),
+    "mesh_queries_2core.json": Source(
+        "2 cores", "39ddced", "python bench/mesh_queries.py --points 100000 --repeats 3"),
+    # Faithful mode, fill against count
+    "fill_vs_count.json": Source(
+        "2 cores", "3e6a8fd", "python bench/fill_vs_count.py --n2 5000 --n3 3000 --seed 0 --out bench/results"),
+    # Pictures, beds, coverings, many parts, tiles
+    "render_speed_2core.json": Source("2 cores", "5cbe0ef", "python bench/render_speed.py --repeats 5"),
+    "render_speed_h100host.json": Source("H100", "573a004", "bash bench/gpu_issue6.sh render"),
+    "dem_fill_2core_issue22b.json": Source(
+        "2 cores", "5d15942", "python bench/dem_fill.py --backends numba --fractions 0.5 0.6", "2026-11-25"),
+    "dem_fill_h100_issue22.json": Source(
+        "H100", "5d15942", "python bench/dem_fill.py --backends numba warp numba-cuda --device cuda:0 "
+        "--fractions 0.5 0.6", "2026-11-25"),
+    "cover_2core.json": Source("2 cores", "1d79145", "python bench/cover.py"),
+    "cover_2core_times.json": Source(
+        "2 cores", "a66c546", "python bench/cover.py --tolerances 0.01 0.005 --counts --no-baseline --repeats 5"),
+    "many_parts_2core.json": Source("2 cores", "a5b9b48", "python bench/many_parts.py --workers 1 2 --count 2000"),
+    "many_parts_h100.json": Source(
+        "H100", "e7f6fee", "NDPACK_BACKEND=numba python3 bench/many_parts.py --workers 1 2 4 8 16 --count 2000 "
+        "--no-meshes"),
+    "tiled_mesh_2core.json": Source(
+        "2 cores", "688b04b", "python bench/tiled_mesh.py --mesh cow.obj --count 20000 --workers 1 2"),
+}
+
+
+def load(name: str) -> dict:
+    if name not in SOURCES:
+        raise KeyError(f"{name} is not in SOURCES: name its machine, commit and command there first")
+    return json.loads((RESULTS / name).read_text())
+
+
+def versions(name: str) -> str:
+    """Python and NumPy as the file records them (else the machine's), then the libraries."""
+    data, machine = load(name), MACHINES[SOURCES[name].machine]
+    recorded = data.get("machine") if isinstance(data.get("machine"), dict) else data.get("versions") or {}
+    return (f"Python {recorded.get('python', machine.python)}, NumPy {recorded.get('numpy', machine.numpy)}, "
+            f"{machine.libraries}")
+
+
+def date(name: str) -> str:
+    data = load(name)
+    recorded = data.get("machine", {}).get("date") if isinstance(data.get("machine"), dict) else None
+    return recorded or SOURCES[name].date or "not recorded"
+
+
+def _run(name: str) -> tuple:
+    return SOURCES[name].machine, SOURCES[name].commit, date(name), versions(name)
+
+
+def sources(*names: str) -> list[str]:
+    """A line per run: its results files, machine and versions, the commit measured, the commands.
+
+    Neighbouring files of one machine, commit and day share a line."""
+    groups: list[list[str]] = []
+    for name in names:
+        if groups and _run(groups[-1][0]) == _run(name):
+            groups[-1].append(name)
+        else:
+            groups.append([name])
+    lines = []
+    for group in groups:
+        what = SOURCES[group[0]]
+        files = ", ".join(f"[`{name}`](../bench/results/{name})" for name in group)
+        commands = "; ".join(f"`{command}`" for command in dict.fromkeys(SOURCES[name].command for name in group))
+        lines.append(f"- {files}: {what.machine}, {versions(group[0])}; code `{what.commit}`, run {date(group[0])}; "
+                     f"{commands}")
+    return lines + [""]
+
+
+def table(head: list[str], rows: list[list[str]]) -> list[str]:
+    """A Markdown table; a column whose cells all start with a number (or are empty) aligns right."""
+    def numeric(column):
+        cells = [row[column] for row in rows if row[column]]
+        return bool(cells) and all(NUMBER.match(cell) for cell in cells)
+    rule = ["---:" if numeric(i) else "---" for i in range(len(head))]
+    return ["| " + " | ".join(cells) + " |" for cells in (head, rule, *rows)] + [""]
+
+
+def seconds(value: float | None) -> str:
+    if value is None:
+        return ""
+    if value < 10:
+        return f"{value:.2f} s"
+    return f"{value:.1f} s" if value < 100 else f"{value:,.0f} s"
+
+
+def count(value: int) -> str:
+    return f"{value:,}"
+
+
+def median_of(rows: list[dict], key: str = "seconds", **where) -> float | None:
+    values = [row[key] for row in rows if all(row.get(k) == v for k, v in where.items())]
+    return statistics.median(values) if values else None
+
+
+def first(rows: list[dict], **where) -> dict:
+    return next(row for row in rows if all(row.get(k) == v for k, v in where.items()))
+
+
+# ----------------------------------------------------------------------------------------------
+# Sections
+
+
+def intro() -> list[str]:
+    lines = [
+        "# Benchmarks",
+        "",
+        "<!-- Written by bench/make_benchmarks.py from bench/results; edit the script, not this page. -->",
+        "",
+        "Today's figures: for each kind of measurement, the newest results file in `bench/results`. Under",
+        "each table are its files, with the machine and versions, the commit whose code was measured and the",
+        "command that reproduces them; where that commit is old, later code was not measured that way. The",
+        "steps that led here, with the figures of older code, are in [benchmarks-history.md](benchmarks-history.md).",
+        "Every packing passed the final float64 check. One code's times moved between leases of one machine",
+        "kind (the history has examples), so compare within a table. Regenerate: `python bench/make_benchmarks.py`.",
+        "",
+        "## Machines",
+        "",
+    ]
+    rows = [[name, m.hardware, f"Python {m.python}, NumPy {m.numpy}, {m.libraries}"] for name, m in MACHINES.items()]
+    return lines + table(["machine", "hardware", "software"], rows)
+
+
+def scale_h100() -> list[str]:
+    arm = load("round_time_h100_issue20_step10c.json")["results"]
+    cube = load("round_time_h100_cube_issue20_step7.json")["results"]
+    arm_1m = first(load("scale_million_h100_warp_issue20_step3.json")["runs"], case="armadillo, 99,976 triangles")
+    warp_1m = first(load("tiled_1M_h100_warp.json")["rows"], run="alone")
+    numba_1m = first(load("tiled_1M_h100_numba.json")["rows"], run="alone")
+    warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
+    profile = load("profile_kernels_h100_issue20_step10.json")
+    warp, cuda = profile["warp"], profile["numba-cuda"]
+    launches, moving = profile["warp"]["kernels"]["move_ids[polish]"][:2]
+
+    def medians(rows, version=None):
+        where = {"version": version} if version else {}
+        return [seconds(median_of(rows, backend=b, **where)) for b in ("warp", "numba-cuda", "numba")]
+
+    rows = [
+        ["armadillo (100k triangles)", "100,000", *medians(arm, "now"),
+         f"{median_of(arm, 'fill', backend='warp', version='now'):.4f}", "medians of 3"],
+        ["unit cube", "100,000", *medians(cube), f"{median_of(cube, 'fill', backend='warp'):.4f}", "medians of 2"],
+        ["armadillo (100k triangles)", "1,000,000", seconds(arm_1m["seconds"]), "", "",
+         f"{arm_1m['fill']['1000000']:.4f}", "one run, older code (below)"],
+        ["unit cube", "1,000,000", seconds(warp_1m["seconds"]), "", seconds(numba_1m["seconds"]),
+         f"{warp_1m['fill']:.4f}", "one run each"],
+        ["unit cube", "10,000,000", seconds(warp_10m["seconds"]), "", "", f"{warp_10m['fill']:.4f}", "one run"],
+    ]
+    head = ["shape", "spheres", "Warp, cuda:0", "numba-cuda", "numba, the host's 16 cores", "fill (Warp)", ""]
+    return [
+        "## Packing at scale: H100",
+        "",
+        "Fast mode, seed 0: seconds of the whole `nd.pack` call, the final float64 check included, the compile",
+        "apart (a warm-up packing first).",
+        "",
+        *table(head, rows),
+        "The armadillo's million is of older code: that run reached 100,000 spheres after "
+        f"{seconds(arm_1m['time_to']['100000'])} (first row: {medians(arm, 'now')[0]}).",
+        "",
+        f"What limits speed: with every launch synchronised to time it, the device computed {seconds(warp['device'])}",
+        f"of Warp's {seconds(warp['wall'])} armadillo packing to 100,000 ({seconds(cuda['device'])} of "
+        f"{seconds(cuda['wall'])} on numba-cuda), {seconds(moving)} of it in",
+        f"{launches} move launches, each as long as its slowest prototype's walk of the mesh tree. The rest is the",
+        f"host's side of {warp['rounds']} rounds (choosing spheres, splitting cells, launches, synchronisations),",
+        "while the device waits: a round still goes back and forth between host and device.",
+        "",
+        *sources("round_time_h100_issue20_step10c.json", "round_time_h100_cube_issue20_step7.json",
+                 "scale_million_h100_warp_issue20_step3.json", "profile_kernels_h100_issue20_step10.json",
+                 "tiled_1M_h100_warp.json", "tiled_1M_h100_numba.json", "tiled_10M_h100_warp_alone.json"),
+    ]
+
+
+def scale_2core() -> list[str]:
+    arm = load("round_time_2core_issue20_step10.json")["results"]
+    cube = [run for run in load("fast_tuning_2core_cube.json")["runs"] if run["variant"] == "now"]
+    million = load("scale_million_2core.json")["runs"][0]
+    nd = load("scale_nd_subdivided_2core.json")["runs"]
+    rows = [
+        ["armadillo (100k triangles)", "100,000", seconds(median_of(arm, version="now")),
+         f"{median_of(arm, 'fill', version='now'):.4f}", "median of 3"],
+        ["unit cube", "100,000", seconds(statistics.mean(run["seconds"] for run in cube)),
+         f"{statistics.mean(run['fill'] for run in cube):.4f}", "mean of seeds 0 and 1"],
+        ["unit cube", "1,000,000", seconds(million["seconds"]), f"{million['fill']['1000000']:.4f}", "one run"],
+    ]
+    for run in nd:
+        spheres = count(run["spheres"]) if run["stop"] == "count" else f"{count(run['spheres'])} (time budget)"
+        fill = run["fill"].get(str(run["spheres"]))
+        rows.append([run["case"].replace("ball with a hole", "ball less a ball"), spheres, seconds(run["seconds"]),
+                     f"{fill:.4f}" if fill else "", "one run"])
+    return [
+        "## Packing at scale: 2 cores",
+        "",
+        "Fast mode, numba on both cores, seed 0 unless said: seconds of the whole `nd.pack` call, compile apart.",
+        "The 4-D to 6-D shapes are `Ball(0, 1) - Ball(0.3, 0.4)`; the subdivided armadillo has 400k triangles.",
+        "",
+        *table(["shape", "spheres", "seconds", "fill", ""], rows),
+        *sources("round_time_2core_issue20_step10.json", "fast_tuning_2core_cube.json", "scale_million_2core.json",
+                 "scale_nd_subdivided_2core.json"),
+    ]
+
+
+def other_shapes_h100() -> list[str]:
+    runs = {}
+    for kind in ("boxes", "subdivided", "nd"):
+        for backend in ("warp", "numba-cuda"):
+            for run in load(f"scale_{kind}_h100_{backend}.json")["runs"]:
+                runs[run["case"], backend] = run
+    budget = load("scale_nd_h100_warp.json")["args"]["time_budget"]
+    rows = []
+    for case, counts in (("unit square", (100_000, 1_000_000)),
+                         ("armadillo, 399,904 triangles", (10_000, 100_000, 1_000_000)),
+                         ("4-D ball with a hole", (100_000,)), ("5-D ball with a hole", (100_000,))):
+        warp, cuda = runs[case, "warp"], runs[case, "numba-cuda"]
+        for n in counts:
+            rows.append([case.replace("ball with a hole", "ball less a ball"), count(n),
+                         seconds(warp["time_to"][str(n)]), seconds(cuda["time_to"][str(n)]),
+                         f"{warp['fill'][str(n)]:.4f}",
+                         f"{warp['compile_s']:.1f} / {cuda['compile_s']:.1f} s" if n == counts[0] else ""])
+    warp, cuda = runs["6-D ball with a hole", "warp"], runs["6-D ball with a hole", "numba-cuda"]
+    rows.append(["6-D ball less a ball", f"reached in {budget:.0f} s", count(warp["spheres"]),
+                 count(cuda["spheres"]), "", f"{warp['compile_s']:.1f} / {cuda['compile_s']:.1f} s"])
+    return [
+        "## Other shapes and dimensions: H100",
+        "",
+        "Fast mode, seed 0, one run: seconds to the round that reached the count. This is the code of issue 5's",
+        "fifth measurement, before issue 20's GPU work: later code was not measured on these shapes (its unit",
+        "cube is in the table above). The plots: `python bench/plot_scale.py "
+        "bench/results/scale_{boxes,subdivided,nd}_h100_warp.json --machine H100`.",
+        "",
+        *table(["shape", "spheres", "Warp", "numba-cuda", "fill (Warp)", "compile (Warp / numba-cuda)"], rows),
+        "![fill against count on the H100](img/scale_fill.png) ![time to each count on the H100](img/scale_time.png)",
+        "",
+        *sources("scale_boxes_h100_warp.json", "scale_boxes_h100_numba-cuda.json", "scale_subdivided_h100_warp.json",
+                 "scale_subdivided_h100_numba-cuda.json", "scale_nd_h100_warp.json", "scale_nd_h100_numba-cuda.json"),
+    ]
+
+
+def auto_mode() -> list[str]:
+    data = load("auto_mode_2core.json")
+    counts = sorted({row["count"] for row in data["rows"]})
+    shapes = list(dict.fromkeys((row["shape"], row["dim"]) for row in data["rows"]))
+    rows = []
+    for shape, dim in shapes:
+        cells = []
+        for n in counts:
+            row = first(data["rows"], shape=shape, count=n)
+            mark = "*" if row["auto"] == "fast" else ""
+            cells.append(f"{row['fast_fill'] / row['faithful_fill']:.4f}{mark} "
+                         f"({row['faithful_s']:.2f} / {row['fast_s']:.2f} s)")
+        rows.append([shape, str(dim), *cells])
+    return [
+        "## Which mode `auto` takes",
+        "",
+        "The fast mode's fill over the faithful mode's at equal counts, and in brackets the seconds of each",
+        f"(faithful / fast; medians of {data['repeats']}, seed 0, numba). `*`: `mode=\"auto\"` takes the fast mode "
+        f"there (above {data['auto_fast_above']} spheres in {' and '.join(f'{d}-D' for d in data['auto_fast_dims'])}),"
+        " the faithful mode elsewhere.",
+        "",
+        *table(["shape", "dim", *(f"{count(n)} spheres" for n in counts)], rows),
+        *sources("auto_mode_2core.json"),
+    ]
+
+
+def compile_once() -> list[str]:
+    user = load("compile_cache_2core_issue19.json")
+    meshes = load("compile_cache_h100_issue19.json")
+    rows = [[row["shape"], seconds(row["first"]["wall"]), seconds(row["warm"]["wall"])] for row in user["rows"]]
+    gpu_rows = []
+    for backend in dict.fromkeys(row["backend"] for row in meshes["rows"]):
+        mesh_1, mesh_2 = (first(meshes["rows"], backend=backend, shape=s) for s in ("first mesh", "new mesh"))
+        gpu_rows.append([f"`{backend}`", seconds(mesh_1["first"]["wall"]), seconds(mesh_1["warm"]["wall"]),
+                         seconds(mesh_2["first"]["wall"]), seconds(mesh_2["warm"]["wall"])])
+    return [
+        "## Compile once",
+        "",
+        "Whole `ndpack pack SPEC -n N --mode fast -q` processes, one after another, from an empty kernel cache:",
+        "the first run of each shape, then a warm re-run of it. Kernels compile once per machine and kind; a",
+        "new size, tree or mesh compiles nothing. One run each.",
+        "",
+        f"2 cores, numba, {user['n']} spheres (the part is `Box(0, side) - Ball(side, 0.6 side)`):",
+        "",
+        *table(["shape", "first process", "warm re-run"], rows),
+        f"H100, {count(meshes['n'])} spheres, the 20k-triangle armadillo, then fandisk as a new mesh:",
+        "",
+        *table(["backend", "first mesh, first process", "warm re-run", "new mesh, first process", "warm re-run"],
+               gpu_rows),
+        *sources("compile_cache_2core_issue19.json", "compile_cache_h100_issue19.json"),
+    ]
+
+
+def tape() -> list[str]:
+    names = ("tape_speed_2core_issue19.json", "tape_speed_h100_issue19.json")
+    machines = {"tape_speed_2core_issue19.json": "2 cores", "tape_speed_h100_issue19.json": "H100"}
+    rows = []
+    for name in names:
+        data = load(name)
+        for backend in dict.fromkeys(row["backend"] for row in data["rows"]):
+            cells = []
+            for shape in ("demo", "deep", "mesh"):
+                row = first(data["rows"], backend=backend, shape=shape)
+                cells.append(f"{row['tape_pack_s'] / row['specialised_pack_s']:.2f} "
+                             f"({row['tape_distances_per_s'] / row['specialised_distances_per_s']:.2f})")
+            rows.append([f"`{backend}`, {machines[name]}", *cells])
+    return [
+        "## The tape against specialised code",
+        "",
+        "Built-in shapes run as data for one compiled interpreter (a tape); `NDPACK_KERNELS=specialised`",
+        "compiles each tree as its own program. Packing time of the tape over the specialised program's",
+        "(above 1: the tape is slower), and in brackets its distance rate over theirs (below 1: slower).",
+        "Shapes: the demo part (3 leaves), a tree of 24 leaves nested four levels, the 20k-triangle armadillo.",
+        "",
+        *table(["backend, machine", "demo", "deep tree", "mesh"], rows),
+        *sources(*names),
+    ]
+
+
+def mesh_queries() -> list[str]:
+    gpu, cpu = load("mesh_queries_h200.json"), load("mesh_queries_2core.json")
+
+    def rates(data):
+        return {(mesh["mesh"], row["engine"], row["device"] != "cpu"): row["queries_per_s"]
+                for mesh in data["meshes"] for row in mesh["rows"]}
+
+    gpu_rates, cpu_rates = rates(gpu), rates(cpu)
+    engines = list(dict.fromkeys((engine, on_gpu) for _, engine, on_gpu in [*gpu_rates, *cpu_rates]))
+    meshes = [mesh["mesh"] for mesh in gpu["meshes"]]
+
+    def rate(values, mesh, engine, on_gpu):
+        value = values.get((mesh, engine, on_gpu))
+        return "" if value is None else (f"{value / 1e6:.2f} M/s" if value >= 1e6 else f"{value / 1e3:.0f} k/s")
+
+    engines = [(engine, on_gpu) for engine, on_gpu in engines if "(oracle)" not in engine]  # = the backend's
+    rows = [[engine, "GPU" if on_gpu else "CPU",
+             *(rate(gpu_rates, mesh, engine, on_gpu) for mesh in meshes),
+             *(rate(cpu_rates, mesh, engine, on_gpu) for mesh in meshes)] for engine, on_gpu in engines]
+    return [
+        "## Mesh distance queries",
+        "",
+        f"Signed distances of {count(gpu['points'])} points (H200) and {count(cpu['points'])} (2 cores) in the "
+        "armadillo's box, per engine: medians",
+        f"of {gpu['repeats']} and {cpu['repeats']} repeats, copies to and from the GPU included. All agree with "
+        "ndpack's float64 answer to",
+        "float32 rounding or better but `wp.Mesh`'s own sign on the subdivided mesh.",
+        "",
+        *table(["engine", "device", *(f"H200 host and GPU, {m}" for m in meshes), *(f"2 cores, {m}" for m in meshes)],
+               rows),
+        *sources("mesh_queries_h200.json", "mesh_queries_2core.json"),
+    ]
+
+
+def fill_against_count() -> list[str]:
+    fill = load("fill_vs_count.json")
+    grids = {"square": "2-D, grid 181²", "square_fine": "2-D, grid 512²", "cube": "3-D, grid 32³"}
+    rows = []
+    for case in fill["cases"]:
+        at = {row["count"]: row["fill"] for row in case["table"]}
+        fit = case["fit"]
+        rows.append([grids[case["name"]], f"{at[100]:.5f}", f"{at[1000]:.5f}",
+                     f"{case['final']['fill']:.5f} at {count(case['final']['count'])}", f"{fit['exponent']:.3f}",
+                     f"{fit['theory']:.3f}", " / ".join(f"{part['exponent']:.3f}" for part in case["local_exponents"])])
+    return [
+        "## Fill against count",
+        "",
+        "The faithful mode, one sphere a round (`batch=1`), seed 0, NumPy; the square a second time on a 512²",
+        "grid. The exponent a of the uncovered fraction, `1 - fill ~ C N^-a`, fitted over N = 100 to the end,",
+        "against Apollonian theory, and over 100-300 / 300-1,000 / 1,000-3,000 / 3,000-end: the 181² grid",
+        "bends the 2-D slope once the gaps are smaller than its cells, the 512² grid keeps close to theory.",
+        "",
+        *table(["case", "fill at 100", "at 1,000", "at the end", "fitted a", "theory", "a over the sub-ranges"], rows),
+        "![fill against count](img/fill_vs_count.png)",
+        "",
+        *sources("fill_vs_count.json"),
+    ]
+
+
+def pictures() -> list[str]:
+    cpu, host = load("render_speed_2core.json"), load("render_speed_h100host.json")
+    rows = []
+    for run in cpu["runs"]:
+        other = first(host["runs"], spheres=run["spheres"], view=run["view"])
+        rows.append([count(run["spheres"]), f"{run['view'][0]:.0f}, {run['view'][1]:.0f}",
+                     seconds(run["image_s"]), seconds(run["with_png_s"]),
+                     seconds(other["image_s"]), seconds(other["with_png_s"])])
+    size = "x".join(map(str, cpu["args"]["size"]))
+    return [
+        "## Pictures: the 3-D ray-caster",
+        "",
+        f"`ndpack.pictures.render` of a fast packing of {count(cpu['args']['base'])} spheres in the unit cube and of "
+        f"ten copies of it side by side, at {size}",
+        "(3x3 rays a pixel), medians after a compiling warm-up. It runs on the CPU.",
+        "",
+        *table(["spheres", "view (azimuth, elevation)", "2 cores: image", "and PNG file", "H100 host: image",
+                "and PNG file"], rows),
+        *sources("render_speed_2core.json", "render_speed_h100host.json"),
+    ]
+
+
+def beds() -> list[str]:
+    cpu, gpu = load("dem_fill_2core_issue22b.json")["rows"], load("dem_fill_h100_issue22.json")["rows"]
+    rows, spread = [], 0.0
+    for row in cpu:
+        same = [other for other in gpu if other["case"] == row["case"] and other.get("target") == row.get("target")]
+        spread = max(spread, *(abs(other["solid_fraction"] / row["solid_fraction"] - 1) for other in same))
+        times = [seconds(first(same, backend=b)["seconds"]) for b in ("numba", "warp", "numba-cuda")]
+        case = "greedy driver (`pack`), the same count" if row["case"].startswith("greedy") else row["case"]
+        rows.append([case, f"{row['target']:.2f}" if "target" in row else "", f"{row['solid_fraction']:.3f}",
+                     count(row["count"]), f"{row['ks']:.4f}" if "ks" in row else "",
+                     count(row["unplaced"]) if "unplaced" in row else "", seconds(row["seconds"]), *times])
+    return [
+        "## Granular beds",
+        "",
+        "The size-distribution driver (`pack_sizes`) in a cylinder (radius 0.5, height 1) and a periodic 4-D",
+        "cell, equal spheres with walls and in periodic cells, and the greedy driver at the same count; each",
+        "backend warmed up first. Fill, count, KS distance and spheres given up are numba's on 2 cores; the",
+        f"other backends reach the same fills within {spread:.1%}.",
+        "",
+        *table(["case", "target", "reached", "spheres", "KS by mass", "given up", "2 cores", "H100 host, numba",
+                "Warp", "numba-cuda"], rows),
+        *sources("dem_fill_2core_issue22b.json", "dem_fill_h100_issue22.json"),
+    ]
+
+
+def coverings() -> list[str]:
+    counts = load("cover_2core.json")["rows"]
+    times = load("cover_2core_times.json")["rows"]
+    rows = []
+    for row in times:
+        mesh, tolerance = row["mesh"], row["tolerance"]
+        ours = first(counts, kind="tolerance", mesh=mesh, tolerance=tolerance, method="ndpack")
+        theirs = first(counts, kind="tolerance", mesh=mesh, tolerance=tolerance, method="k-means")
+        k_means = count(theirs["spheres"]) if not theirs.get("cap_hit") else f"> {count(theirs['spheres'])}"
+        rows.append([mesh, count(row["triangles"]), f"{tolerance:.1%}", count(ours["spheres"]), seconds(row["seconds"]),
+                     k_means, f"{theirs['boundary_covered']:.1%} / {theirs['interior_covered']:.1%}"])
+    repeats = load("cover_2core_times.json")["args"]["repeats"]
+    return [
+        "## Collision spheres: coverings against k-means",
+        "",
+        "Spheres to cover each mesh with a protrusion of at most the given share of its bounding-box diagonal:",
+        "`nd.cover` beside k-means on surface samples (each cluster's sphere on its centroid, reaching its",
+        "farthest sample; the fewest clusters within the protrusion, at most 20,000). Both are judged by",
+        f"`nd.check_covering` on fresh samples. ndpack's time: median of {repeats} (mesh loading and compiling apart).",
+        "",
+        *table(["mesh", "triangles", "protrusion", "ndpack spheres", "ndpack time", "k-means spheres",
+                "k-means covered (boundary / interior samples)"], rows),
+        *sources("cover_2core.json", "cover_2core_times.json"),
+    ]
+
+
+def many_parts() -> list[str]:
+    cpu, gpu = load("many_parts_2core.json"), load("many_parts_h100.json")
+    workers = sorted({row["workers"] for row in cpu["rows"] + gpu["rows"]})
+    rows = []
+    for n in workers:
+        cells = []
+        for data in (cpu, gpu):
+            row = next((row for row in data["rows"] if row["workers"] == n), None)
+            cells.append(f"{seconds(row['seconds'])} ({row['parts_per_minute']:.0f} a minute)" if row else "")
+        rows.append([str(n), *cells])
+    return [
+        "## Many parts: a local process pool",
+        "",
+        f"`nd.pack_many`, {count(cpu['count'])} spheres a part, numba, one run each after a run that compiled every "
+        "kernel: on 2 cores",
+        f"{len(cpu['sources'])} parts (three meshes, nine built-in shapes), on the H100 machine's 16 cores "
+        f"{len(gpu['sources'])} built-in shapes (2-D to 4-D).",
+        "",
+        *table(["workers", "2 cores", "H100 host"], rows),
+        *sources("many_parts_2core.json", "many_parts_h100.json"),
+    ]
+
+
+def tiles() -> list[str]:
+    runs, alone = [], {}
+    for name, label in (("tiled_1M_h100_numba.json", "H100 host, numba"), ("tiled_1M_h100_warp.json", "H100, Warp"),
+                        ("tiled_10M_h100_warp_alone.json", "H100, Warp"), ("tiled_10M_h100_warp_8.json", "H100, Warp"),
+                        ("tiled_10M_h100_warp_16.json", "H100, Warp"), ("tiled_2core.json", "2 cores, numba")):
+        for row in load(name)["rows"]:
+            if row["run"] == "alone":
+                alone[label, row["spheres"]] = row["fill"]
+            # The ten-million tiled runs were apart from their run alone (--no-alone): the ratio is to its file.
+            ratio = row.get("fill_ratio") or (row["fill"] / alone[label, row["spheres"]] if "workers" in row else None)
+            run = row["run"].replace("1 workers", "1 worker")
+            if "workers" in row and "Warp" in label:
+                run = run.replace("workers", "processes")
+            runs.append([label, run, count(row["spheres"]), seconds(row["seconds"]), f"{row['fill']:.5f}",
+                         f"{ratio:.4f}" if ratio else "",
+                         f"{row['busy_share']:.2f}" if "busy_share" in row else "",
+                         f"{row['halo_share']:.2f}" if "halo_share" in row else ""])
+    mesh = load("tiled_mesh_2core.json")
+    mesh_rows = [[row["run"].replace("1 workers", "1 worker"), seconds(row["seconds"]), f"{row['fill']:.4f}"]
+                 for row in mesh["rows"]]
+    return [
+        "## One domain in tiles",
+        "",
+        "`nd.pack_tiled` (default tiles: 4 slabs a worker across x) against `nd.pack` alone on the same backend,",
+        "the unit cube, seed 0, one run each; seconds of the whole call, the final check included. \"of alone\":",
+        "the fill over the run alone's; \"busy\": the tiles' time over the workers times the phases' wall time;",
+        "\"halo share\": the spheres made in a halo rather than in their own tile.",
+        "",
+        *table(["machine, backend", "run", "spheres", "seconds", "fill", "of alone", "busy", "halo share"], runs),
+        f"A mesh in tiles (2 cores, numba, {mesh['mesh']}, {count(mesh['count'])} spheres): a tile packs "
+        "`shape & Box(...)`, whose gradient",
+        "is taken by differences, where a mesh alone has a closed form.",
+        "",
+        *table(["run", "seconds", "fill"], mesh_rows),
+        *sources("tiled_1M_h100_numba.json", "tiled_1M_h100_warp.json", "tiled_10M_h100_warp_alone.json",
+                 "tiled_10M_h100_warp_8.json", "tiled_10M_h100_warp_16.json", "tiled_2core.json",
+                 "tiled_mesh_2core.json"),
+    ]
+
+
+SECTIONS = (intro, scale_h100, scale_2core, other_shapes_h100, auto_mode, compile_once, tape, mesh_queries,
+            fill_against_count, pictures, beds, coverings, many_parts, tiles)
+
+
+def page() -> str:
+    lines = [line for section in SECTIONS for line in section()]
+    while lines and not lines[-1]:
+        lines.pop()
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", default=str(PAGE), help="where to write the page ('-' prints it)")
+    args = parser.parse_args(argv)
+    text = page()
+    if args.out == "-":
+        sys.stdout.write(text)
+    else:
+        Path(args.out).write_text(text)
+        print(f"{args.out}: {text.count(chr(10))} lines")
+
+
+if __name__ == "__main__":
+    main()
