@@ -42,6 +42,8 @@ MACHINES = {
                        "3.11.7", "2.4.6", "numba 0.68.1, Warp 1.19.0 (CPU)"),
     "H100": Machine("NVIDIA H100 80GB HBM3 (driver 580.159.04), 16-core Intel Xeon host",
                     "3.12.3", "2.4.6", "numba 0.68.0, numba-cuda 0.30.4, Warp 1.19.0"),
+    "H100, NumPy 2.5": Machine("NVIDIA H100 80GB HBM3 (driver 580.159.04), 16-core Intel Xeon host",
+                               "3.12.3", "2.5.2", "numba 0.68.0, Warp 1.19.0"),
     "H200": Machine("NVIDIA H200 of the same pool (driver 580.159.04), 16-core Intel Xeon host",
                     "3.12.3", "2.4.6", "numba 0.68.0, numba-cuda 0.30.4, Warp 1.19.0"),
 }
@@ -69,8 +71,10 @@ SOURCES = {
     "round_time_h100_cube_issue20_step7.json": Source(
         "H100", "4ea141e", "python3 bench/round_time.py --mesh cube --count 100000 "
         "--backends warp numba-cuda numba --versions now=. --repeats 2", "2026-11-25"),
-    "scale_million_h100_warp_issue20_step3.json": Source(
-        "H100", "d3149d8", "bash bench/gpu_issue20.sh million"),
+    "scale_million_h100_warp_issue46.json": Source(
+        "H100, NumPy 2.5", "4210e2b", "bash bench/gpu_issue46.sh warp", "2026-11-27"),
+    "scale_million_h100_numba_issue46.json": Source(
+        "H100, NumPy 2.5", "4210e2b", "bash bench/gpu_issue46.sh numba", "2026-11-27"),
     "tiled_1M_h100_warp.json": Source("H100", "e7f6fee", "bash bench/gpu_issue25.sh gpu"),
     "tiled_1M_h100_numba.json": Source("H100", "e7f6fee", "bash bench/gpu_issue25.sh cpu"),
     "tiled_10M_h100_warp_alone.json": Source(
@@ -238,9 +242,10 @@ def intro() -> list[str]:
 def scale_h100() -> list[str]:
     arm = load("round_time_h100_issue20_step10c.json")["results"]
     cube = load("round_time_h100_cube_issue20_step7.json")["results"]
-    arm_1m = first(load("scale_million_h100_warp_issue20_step3.json")["runs"], case="armadillo, 99,976 triangles")
-    warp_1m = first(load("tiled_1M_h100_warp.json")["rows"], run="alone")
-    numba_1m = first(load("tiled_1M_h100_numba.json")["rows"], run="alone")
+    million = {backend: {run["case"]: run for run in load(f"scale_million_h100_{backend}_issue46.json")["runs"]
+                         if run["mode"] == "fast"} for backend in ("warp", "numba")}
+    arm_1m, cube_1m = (million["warp"][case] for case in ("armadillo, 99,976 triangles", "unit cube"))
+    arm_1m_cpu, cube_1m_cpu = (million["numba"][case] for case in ("armadillo, 99,976 triangles", "unit cube"))
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
     profile = load("profile_kernels_h100_issue20_step10.json")
     warp, cuda = profile["warp"], profile["numba-cuda"]
@@ -254,10 +259,10 @@ def scale_h100() -> list[str]:
         ["armadillo (100k triangles)", "100,000", *medians(arm, "now"),
          f"{median_of(arm, 'fill', backend='warp', version='now'):.4f}", "medians of 3"],
         ["unit cube", "100,000", *medians(cube), f"{median_of(cube, 'fill', backend='warp'):.4f}", "medians of 2"],
-        ["armadillo (100k triangles)", "1,000,000", seconds(arm_1m["seconds"]), "", "",
-         f"{arm_1m['fill']['1000000']:.4f}", "one run, older code (below)"],
-        ["unit cube", "1,000,000", seconds(warp_1m["seconds"]), "", seconds(numba_1m["seconds"]),
-         f"{warp_1m['fill']:.4f}", "one run each"],
+        ["armadillo (100k triangles)", "1,000,000", seconds(arm_1m["seconds"]), "", seconds(arm_1m_cpu["seconds"]),
+         f"{arm_1m['fill']['1000000']:.4f}", "one run each (NumPy 2.5)"],
+        ["unit cube", "1,000,000", seconds(cube_1m["seconds"]), "", seconds(cube_1m_cpu["seconds"]),
+         f"{cube_1m['fill']['1000000']:.4f}", "one run each (NumPy 2.5)"],
         ["unit cube", "10,000,000", seconds(warp_10m["seconds"]), "", "", f"{warp_10m['fill']:.4f}", "one run"],
     ]
     head = ["shape", "spheres", "Warp, cuda:0", "numba-cuda", "numba, the host's 16 cores", "fill (Warp)", ""]
@@ -268,8 +273,10 @@ def scale_h100() -> list[str]:
         "apart (a warm-up packing first).",
         "",
         *table(head, rows),
-        "The armadillo's million is of older code: that run reached 100,000 spheres after "
-        f"{seconds(arm_1m['time_to']['100000'])} (first row: {medians(arm, 'now')[0]}).",
+        "The millions are of this code (commit 4210e2b, after issue 45's final search and determinism fix):",
+        f"Warp is {arm_1m_cpu['seconds'] / arm_1m['seconds']:.1f}x the host's 16 cores on the armadillo and "
+        f"{cube_1m_cpu['seconds'] / cube_1m['seconds']:.1f}x on the cube;",
+        f"its armadillo run reached 100,000 spheres after {seconds(arm_1m['time_to']['100000'])}.",
         "",
         f"What limits speed: with every launch synchronised to time it, the device computed {seconds(warp['device'])}",
         f"of Warp's {seconds(warp['wall'])} armadillo packing to 100,000 ({seconds(cuda['device'])} of "
@@ -279,8 +286,8 @@ def scale_h100() -> list[str]:
         "while the device waits: a round still goes back and forth between host and device.",
         "",
         *sources("round_time_h100_issue20_step10c.json", "round_time_h100_cube_issue20_step7.json",
-                 "scale_million_h100_warp_issue20_step3.json", "profile_kernels_h100_issue20_step10.json",
-                 "tiled_1M_h100_warp.json", "tiled_1M_h100_numba.json", "tiled_10M_h100_warp_alone.json"),
+                 "scale_million_h100_warp_issue46.json", "scale_million_h100_numba_issue46.json",
+                 "profile_kernels_h100_issue20_step10.json", "tiled_10M_h100_warp_alone.json"),
     ]
 
 

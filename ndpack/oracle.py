@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -60,7 +61,7 @@ class Volume:
         return float(self.value)
 
 
-def ball_volume(dim: int, radius=1.0):
+def ball_volume(dim: int, radius=1.0) -> Any:
     """Volume of the ``dim``-ball of the given radius (scalar or array): pi^(d/2) / Gamma(d/2 + 1) r^d."""
     unit = math.pi ** (dim / 2) / math.gamma(dim / 2 + 1)
     return unit * np.asarray(radius, dtype=np.float64) ** dim
@@ -408,7 +409,7 @@ def check_packable(shape: Oracle, samples_per_face: int = 512, seed: int = 0) ->
     if not isinstance(shape, Oracle):
         check_compatible(shape)
     if shape.is_empty_set:
-        raise ShapeError(f"there is nothing to pack: {shape.reason}")
+        raise ShapeError(f"there is nothing to pack: {getattr(shape, 'reason', 'the shape is empty')}")
     bounds = shape.bounds
     if bounds.shape != (2, shape.dim):
         raise BoundsError(f"bounds must have shape (2, {shape.dim}), got {bounds.shape}")

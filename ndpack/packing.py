@@ -7,11 +7,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from .oracle import ball_volume
-from .verify import verify
+from .oracle import Oracle, ball_volume
+from .verify import Verification, verify
 
 #: Bumped when the file layout changes; load() refuses files from the future.
 FORMAT_VERSION = 1
@@ -103,7 +104,7 @@ class Packing:
     params: dict = field(default_factory=dict)
     stop_reason: str = ""
     repair: dict | None = None
-    shape: object = field(default=None, repr=False, compare=False)
+    shape: Oracle | None = field(default=None, repr=False, compare=False)
 
     # ------------------------------------------------------------------ derived values
     @property
@@ -128,11 +129,11 @@ class Packing:
         """Standard error of :attr:`fill` from the volume estimate (0 when the volume is exact)."""
         return self.fill * self.volume_error / self.volume
 
-    def verify(self, shape=None, tol: float | None = None, independent: bool = False):
+    def verify(self, shape=None, tol: float | None = None, independent: bool = False) -> Verification:
         """Check validity in float64; see :func:`ndpack.verify`."""
         return verify(self, shape, tol, independent=independent)
 
-    def plot(self, shape=None, ax=None, axes=None, at=None, up="auto"):
+    def plot(self, shape=None, ax=None, axes=None, at=None, up="auto") -> Any:
         """Draw the packing (2-D) or a slice of it; see :func:`ndpack.pictures.plot`."""
         return service("plot")(self, shape, ax=ax, axes=axes, at=at, up=up)
 

@@ -234,7 +234,7 @@ def verify(packing, shape=None, tol: float | None = None, radii=None, independen
         raise ParameterError(f"centers_only={centers_only} contradicts kind={kind!r}: give one of them")
     if kind is not None:
         centers_only = kind == "centers_only"
-    from_file = ()
+    from_file: tuple[str, ...] = ()
     if radii is None:
         centers, radii = packing.centers, packing.radii
         shape = packing.shape if shape is None else shape

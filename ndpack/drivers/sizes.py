@@ -82,7 +82,7 @@ class SizeDistribution:
     """
 
     def __init__(self, radii, cdf, by: str, discrete: bool, description: dict):
-        self._radii, self._cdf, self.by, self.discrete = radii, cdf, by, discrete
+        self._radii, self._cdf, self.by, self.is_discrete = radii, cdf, by, discrete
         self.description = description
 
     # ------------------------------------------------------------------ construction
@@ -151,12 +151,12 @@ class SizeDistribution:
     def _number_curve(self, dim: int):
         """Radii (m,) ascending and the cumulative share of the count (m,) in ``dim`` dimensions."""
         radii, cdf = self._radii, self._cdf
-        if not self.discrete and len(radii) < CURVE_POINTS:  # room for the division by r**d
+        if not self.is_discrete and len(radii) < CURVE_POINTS:  # room for the division by r**d
             fine = np.interp(np.linspace(0, len(radii) - 1, CURVE_POINTS), np.arange(len(radii)), radii)
             radii, cdf = fine, np.interp(fine, self._radii, self._cdf)
         if self.by == "count":
             return radii, cdf
-        if self.discrete:  # a class's count goes as its mass over a ball's volume
+        if self.is_discrete:  # a class's count goes as its mass over a ball's volume
             counts = np.diff(cdf, prepend=0.0) / radii**dim
             return radii, np.cumsum(counts) / counts.sum()
         middle = 0.5 * (radii[1:] + radii[:-1])
@@ -171,7 +171,7 @@ class SizeDistribution:
         discrete distribution's classes get their counts by largest remainders.
         """
         radii, cdf = self._number_curve(dim)
-        if self.discrete:
+        if self.is_discrete:
             wanted = np.diff(cdf, prepend=0.0) * count
             counts = np.floor(wanted).astype(np.int64)
             short = count - counts.sum()
@@ -184,7 +184,7 @@ class SizeDistribution:
 
     def mean_volume(self, dim: int) -> float:
         """The mean ball volume of a sphere drawn by count, in ``dim`` dimensions."""
-        if self.discrete:
+        if self.is_discrete:
             values, cdf = self._number_curve(dim)
             return float((np.diff(cdf, prepend=0.0) * ball_volume(dim, values)).sum())
         return float(ball_volume(dim, self.radii(dim, MEAN_SAMPLES)).mean())  # the quantiles' mean
@@ -193,7 +193,7 @@ class SizeDistribution:
         """The target's cumulative share (on its basis) of radius ``<= radii`` (``< radii`` with
         ``left``, which differs only at a discrete class's radius): same shape as ``radii``."""
         radii = np.asarray(radii, dtype=np.float64)
-        if self.discrete:
+        if self.is_discrete:
             rows = np.searchsorted(self._radii, radii, side="left" if left else "right")
             return np.concatenate([[0.0], self._cdf])[rows]
         return np.interp(radii, self._radii, self._cdf, left=0.0, right=1.0)
@@ -205,13 +205,13 @@ class SizeDistribution:
         ks = 1.0
         if len(radii):
             below = np.concatenate([[0.0], np.cumsum(weights)]) / weights.sum()  # share up to each sphere
-            points = np.unique(np.concatenate([radii, self._radii if self.discrete else []]))
+            points = np.unique(np.concatenate([radii, self._radii if self.is_discrete else []]))
             after = below[np.searchsorted(radii, points, side="right")]
             before = below[np.searchsorted(radii, points, side="left")]
             ks = float(max(np.abs(after - self.cdf(points, dim)).max(),
                            np.abs(before - self.cdf(points, dim, left=True)).max()))
-        classes = ()
-        if self.discrete:
+        classes: tuple[SizeClass, ...] = ()
+        if self.is_discrete:
             nearest = np.abs(np.log(packing.radii)[:, None] - np.log(self._radii)[None]).argmin(axis=1)
             volumes = ball_volume(dim, packing.radii)
             total = max(volumes.sum(), 1e-300)

@@ -164,8 +164,9 @@ def pack_many(sources, n: int = 1000, *, out=None, format: str = "npz", client=N
     params.update({key: value for key, value in (("holes", holes), ("sign", sign)) if value is not None})
     names = _names(sources)
     folder = _folder(out) if out is not None else None
-    parts = [dict(name=name, source=_label(source), file=None, status=PENDING, error=None, spheres=None, fill=None,
-                  stop_reason=None, seconds=None, params=dict(params)) for name, source in zip(names, sources)]
+    parts: list[dict] = [
+        dict(name=name, source=_label(source), file=None, status=PENDING, error=None, spheres=None, fill=None,
+             stop_reason=None, seconds=None, params=dict(params)) for name, source in zip(names, sources)]
     if folder is not None:
         for part, source in zip(parts, sources):
             part["file"] = str(folder / f"{part['name']}{suffix}")
@@ -173,7 +174,7 @@ def pack_many(sources, n: int = 1000, *, out=None, format: str = "npz", client=N
                     part["file"]).resolve():
                 raise ParameterError(f"{part['file']} would overwrite its source: write to another folder or format")
         _resume(parts, folder / MANIFEST, format)
-    packings = {}
+    packings: dict = {}
     todo = [i for i, part in enumerate(parts) if part["status"] != SKIPPED]
     tasks = {i: _Task(sources[i], n, pack_options, parts[i]["file"], format, holes, sign) for i in todo}
 
@@ -200,11 +201,10 @@ def pack_many(sources, n: int = 1000, *, out=None, format: str = "npz", client=N
         interrupted = True
     finally:
         bar.close()
-    packings = {part["name"]: packings.get(part["name"]) for part in parts  # in the order of sources
-                if part["status"] in (DONE, SKIPPED)}
-    if folder is not None:
-        packings = _Lazy(packings, {part["name"]: (part["file"], format) for part in parts})
-    return ManyResult(parts=parts, packings=packings, out=folder, interrupted=interrupted)
+    made = {part["name"]: packings.get(part["name"]) for part in parts  # in the order of sources
+            if part["status"] in (DONE, SKIPPED)}
+    kept: Mapping = made if folder is None else _Lazy(made, {part["name"]: (part["file"], format) for part in parts})
+    return ManyResult(parts=parts, packings=kept, out=folder, interrupted=interrupted)
 
 
 # ------------------------------------------------------------------------------- the work of one part

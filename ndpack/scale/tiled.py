@@ -208,7 +208,7 @@ class _Spheres:
     def __init__(self, tiling: Tiling, centers, radii):
         self.tiling = tiling
         self.global_centers, self.global_radii = centers, radii
-        self.by_tile = [[] for _ in range(tiling.total)]  # lists of (centers, radii, phase)
+        self.by_tile: list[list[tuple]] = [[] for _ in range(tiling.total)]  # (centers, radii, phase) each
         self.count = len(radii)
 
     def add(self, tile: int, centers, radii, phase: int) -> None:

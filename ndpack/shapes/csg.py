@@ -43,8 +43,8 @@ def check_parts(node: str, *children: Oracle) -> int:
     dim = check_compatible(*children)
     for child in children:
         if is_special(child):
-            raise ShapeError(f"{node} cannot hold {child!r} ({child.reason}); combine shapes with |, &, - and ~, "
-                             "which leave an empty part out")
+            raise ShapeError(f"{node} cannot hold {child!r} ({getattr(child, 'reason', '')}); combine shapes with "
+                             "|, &, - and ~, which leave an empty part out")
     return dim
 
 
@@ -100,9 +100,9 @@ class _Boolean(_Node):
         if len(children) < 2:
             raise ShapeError(f"{type(self).__name__} needs at least two shapes, got {len(children)}")
         self.dim = check_parts(type(self).__name__, *children)
-        flat = []
+        flat: list[Oracle] = []
         for child in children:  # (a | b) | c is stored as one node of three children
-            flat.extend(child.children if type(child) is type(self) else [child])
+            flat.extend(getattr(child, "children") if type(child) is type(self) else [child])
         self.children = tuple(flat)
 
     def _distance(self, points):
@@ -175,12 +175,13 @@ class Intersection(_Boolean):
         self.exact_inside = all(c.exact_inside for c in self.children)
         self.exact_outside = False
         self.convex = all(c.convex for c in self.children)
-        self._bounds = common_box(self.children)
-        if self._bounds is None:  # only where the metaclass (_Built) was bypassed: it builds an empty set
+        bounds = common_box(self.children)
+        if bounds is None:  # only where the metaclass (_Built) was bypassed: it builds an empty set
             raise ShapeError(
                 f"the intersection of {', '.join(map(repr, self.children))} is empty: their "
                 "bounding boxes do not overlap"
             )
+        self._bounds = bounds
 
 
 class Complement(_Node):
@@ -215,7 +216,7 @@ class Complement(_Node):
         tape.add(self.child)
         tape.operation(ops.NEGATE)
 
-    def complement(self):
+    def complement(self) -> Oracle:
         return self.child
 
     def __repr__(self):

@@ -168,7 +168,7 @@ class TriangleMesh(Oracle):
     def n_triangles(self) -> int:
         return len(self.faces)
 
-    def closest_points(self, points, max_distance: float = np.inf):
+    def closest_points(self, points, max_distance: float = np.inf) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Nearest points on the surface, searched only within ``max_distance``.
 
         Parameters

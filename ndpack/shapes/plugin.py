@@ -12,6 +12,7 @@ Example::
 from __future__ import annotations
 
 import operator
+from typing import Callable
 
 import numpy as np
 
@@ -84,6 +85,7 @@ class Function(Oracle):
 
     convex = False
     numpy_only = True  # a NumPy function: no compiled backend runs it (ScalarFunction's do)
+    _slope_checked = False  # set by check_plugin_slopes once its slopes were checked
 
     def __init__(
         self, fn, dim, bounds, exact_inside=False, exact_outside=False, gradient=None, name=None
@@ -234,7 +236,7 @@ class Function(Oracle):
         return f"Function({self.name!r}, dim={self.dim})"
 
 
-def plugin(dim, bounds=None, **flags):
+def plugin(dim: int, bounds=None, **flags) -> Callable[[Callable], Function]:
     """Decorator that turns a vectorised distance function into a :class:`Function`.
 
     Parameters
@@ -275,7 +277,7 @@ def check_plugin_slopes(shape) -> None:
     kept on the plug-in: packing it again costs nothing.
     """
     for node in tree(shape):
-        if isinstance(node, Function) and not getattr(node, "_slope_checked", False):
+        if isinstance(node, Function) and not node._slope_checked:
             node.check_lipschitz()
             node._slope_checked = True
 

@@ -282,7 +282,7 @@ class Polygon(Oracle):
         """Signed distances (n,) and, if asked, unit gradients (n, 2), chunk by chunk."""
         n = len(points)
         distance = np.empty(n)
-        gradient = np.empty((n, 2)) if with_gradient else None
+        gradient = np.empty((n if with_gradient else 0, 2))
         chunk = max(1, self.chunk_pairs // self.n_edges)
         for begin in range(0, n, chunk):
             part = slice(begin, min(begin + chunk, n))
@@ -290,7 +290,7 @@ class Polygon(Oracle):
             distance[part] = d
             if with_gradient:
                 gradient[part] = g
-        return distance, gradient
+        return distance, gradient if with_gradient else None
 
     def _evaluate_chunk(self, points: np.ndarray, with_gradient: bool):
         start, edge = self._start, self._edge

@@ -21,6 +21,7 @@ backend and :meth:`~ndpack.Oracle.distance` run its Numba CPU form over all poin
 from __future__ import annotations
 
 import ast
+from typing import Callable
 
 import numpy as np
 
@@ -163,7 +164,7 @@ class ScalarFunction(Function):
         return f"ScalarFunction({self.name!r}, dim={self.dim})"
 
 
-def scalar_plugin(dim, bounds=None, params=(), **flags):
+def scalar_plugin(dim: int, bounds=None, params=(), **flags) -> Callable[[Callable], ScalarFunction]:
     """Decorator that turns a scalar distance function into a :class:`ScalarFunction`.
 
     Examples

@@ -342,4 +342,4 @@ def test_render_help_says_how_to_turn_the_view(capsys):
         main(["render", "--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert "--up {auto,x,y,z,-x,-y,-z}" in text and "--view AZIMUTH,ELEVATION" in text and "--axes" in text
-    assert ".obj, .gltf, .glb: y" in text
+    assert "broadest base" in text and ".obj/.gltf/.glb y" in text

@@ -167,7 +167,7 @@ class Covering:
     protrusion: np.ndarray
     report: CoverReport
     params: dict = field(default_factory=dict)
-    shape: object = field(default=None, repr=False, compare=False)
+    shape: Oracle | None = field(default=None, repr=False, compare=False)
 
     @property
     def dim(self) -> int:
@@ -198,7 +198,7 @@ class Covering:
     def __repr__(self) -> str:
         return f"<Covering {self.summary()}>"
 
-    def as_packing(self):
+    def as_packing(self) -> Packing:
         """The spheres as a :class:`~ndpack.Packing` (to save in any sphere format); its
         ``params["covering"]`` holds this run's parameters. Its spheres overlap and reach out of
         the shape, so :meth:`Packing.verify` fails on it: check it with :func:`check_covering`
@@ -217,7 +217,7 @@ class Covering:
         For a hierarchy, save :meth:`tree`."""
         return io.save(self.as_packing(), path, format, **options)
 
-    def tree(self, branching: int = 8, depth: int = 3, seed: int = 0):
+    def tree(self, branching: int = 8, depth: int = 3, seed: int = 0) -> sphere_tree.SphereTree:
         """A sphere-tree over this covering's shape whose deepest level has at most
         ``branching ** (depth - 1)`` spheres; see :func:`.sphere_tree.covering_tree`."""
         return sphere_tree.covering_tree(self.shape, branching=branching, depth=depth, seed=seed)
@@ -302,7 +302,8 @@ def cover(
         refuse_too_many(shape, float(protrusion), max_spheres, int(samples))
     show = sys.stderr.isatty() if progress is None else progress
     steps = _Steps(show)
-    kept, checks, passes, stopped = None, 0, 0, None  # kept: the last whole step's (centers, radii, clearance)
+    kept: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # the last whole step's (centers, radii, clearance)
+    checks, passes, stopped = 0, 0, None
     try:
         steps.start("samples and candidates")
         problem = Problem.make(shape, samples, packing, seed, backend, device, compiled=True)
@@ -326,6 +327,7 @@ def cover(
             radii, keep = _refine(problem.points, centers, radii, clearance, tolerance - inner)
             centers, radii, clearance = centers[keep], radii[keep], clearance[keep]
         else:
+            assert n is not None  # a count, where no protrusion was given (checked above)
             centers, radii, clearance, inner = problem.cover_count(everything, int(n))
             tolerance, limit = inner + 0.5 * problem.spacing, None
         kept = centers, radii, clearance
@@ -337,13 +339,13 @@ def cover(
         steps.done(count=FIX_PASSES - passes)
         for checks in range(1, CHECKS + 1):
             steps.start(f"checking on {check_samples} fresh samples ({checks} of at most {CHECKS})")
-            report, missed, missed_normals = _check(reference, *kept[:2], check_samples, 200_000, seed + checks,
-                                                    cells)
+            report, missed, missed_normals = _check(reference, kept[0], kept[1], check_samples, 200_000,
+                                                    seed + checks, cells)
             steps.done(len(kept[1]))
             if report.covered or checks == CHECKS:
                 break
             # The check found points between every sample so far: serve them, and check on fresh ones.
-            kept = problem.fix(missed, missed_normals, *kept, inner, limit, tolerance - inner)
+            kept = problem.fix(missed, missed_normals, kept[0], kept[1], kept[2], inner, limit, tolerance - inner)
             report = None
         reach = _protrusions(reference, *kept[:2])
         steps.done(len(kept[1]), count=steps.left)

@@ -103,7 +103,7 @@ def refuse_too_many(shape, protrusion: float, max_spheres: int | None, samples: 
     if expected <= limit:
         return
     reason = "max_spheres" if max_spheres is not None and expected > max_spheres else "samples"
-    limit = max_spheres if reason == "max_spheres" else samples
+    limit = max_spheres if max_spheres is not None and reason == "max_spheres" else samples
     target = max(limit // 10, 1)
     raise TooManySpheres(expected=expected, limit=limit, reason=reason, protrusion=protrusion,
                          suggested=_protrusion_for(measures, shape.dim, target), suggested_count=target,

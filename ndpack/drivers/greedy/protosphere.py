@@ -959,10 +959,12 @@ def pack_sizes(
         raise ParameterError(f"solid_fraction must lie in (0, 1), got {solid_fraction!r}")
     _check_parameters(1 if n is None else n, 0.0, None, time_budget, iterations, 1, restarts, seed)
     on_invalid = _check_run(shape, on_invalid, on_round)
-    count = n
     if solid_fraction is not None:
         volume = shape.volume().value
         count = max(1, int(round(solid_fraction * volume / distribution.mean_volume(shape.dim))))
+    else:
+        assert n is not None  # one of the two, checked above
+        count = int(n)
     if count > MAX_SIZED:
         raise ParameterError(f"the distribution asks for {count:,} spheres, more than {MAX_SIZED:,}: ask for a lower "
                              "solid_fraction or n, or larger radii")
