@@ -4,8 +4,8 @@
 
 For each shape and count, packs with ``mode="faithful"`` and ``mode="fast"`` (numba, seed 0) and
 records the median time of ``--repeats`` runs, the fill, and their ratios. ``mode="auto"`` takes
-the fast mode above ``AUTO_FAST_ABOVE`` spheres in ``AUTO_FAST_DIMS``; this table says whether the
-fast mode is as good there, and why the faithful mode keeps 4-D and up.
+the fast mode above ``AUTO_FAST_ABOVE`` spheres; this table says whether the fast mode is as good there
+(4-D and up: bench/fast_fill.py).
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 import ndpack as nd
-from ndpack.drivers.greedy.protosphere import AUTO_FAST_ABOVE, AUTO_FAST_DIMS, choose_mode
+from ndpack.drivers.greedy.protosphere import AUTO_FAST_ABOVE, choose_mode
 
 from _common import machine_info, write_json
 
@@ -70,7 +70,7 @@ def main():
                   f"{fast_fill / faithful_fill:.4f} | {auto} |", flush=True)
     write_json(args.out, dict(machine=machine_info(), numba=__import__("numba").__version__,
                               repeats=args.repeats, auto_fast_above=AUTO_FAST_ABOVE,
-                              auto_fast_dims=list(AUTO_FAST_DIMS), rows=rows))
+                              rows=rows))
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@
 
 Left, ``ndpack.pictures.render`` of the 3-D slice w = 0; right, ``save_figure``'s circles in the
 plane z = w = 0, where the two holes show. The packing is the quick start's (seed 0, the default
-mode: faithful in 4-D).
+mode: fast, above 100 spheres in any dimension).
 """
 
 from __future__ import annotations

@@ -80,12 +80,13 @@ POLISH_ITERATIONS, POLISH_EPS_START, POLISH_EPS_END, POLISH_POWER = 100, 0.05, 1
 #: clearance (99% within 2e-5, at most 1.4e-4; armadillo, 30,000 spheres), far below what the fast
 #: window gives away, for about 20% fewer move steps and 40% fewer polish steps (docs/benchmarks.md).
 FAST_EPS_END, FAST_POLISH_EPS_END = 1e-4, 2e-5
-#: ``mode="auto"`` takes the fast mode above this many spheres in these dimensions: there it
-#: filled within 0.14% of the faithful mode at equal counts, 1.3-6.6x sooner (200-5,000
-#: spheres); the faithful mode keeps small counts (the exact greedy order, for under 0.4 s
-#: more) and 4-D and up, where the fast mode's fill was 0.6-4.5% lower at 200-5,000 spheres
-#: (bench/auto_mode.py, docs/benchmarks.md "Which mode `auto` takes").
-AUTO_FAST_ABOVE, AUTO_FAST_DIMS = 100, (2, 3)
+#: ``mode="auto"`` takes the fast mode above this many spheres, in every dimension: in 2-D and
+#: 3-D it filled within 0.14% of the faithful mode at equal counts, 1.3-6.6x sooner (200-5,000
+#: spheres; bench/auto_mode.py); from 4-D up, with its narrower window and its ties taken one
+#: layer at a time (:func:`~ndpack.drivers.greedy.rounds.fast_window`), within the seeds'
+#: spread of the faithful mode's mean fill at 1,000 spheres (bench/fast_fill.py). The faithful
+#: mode keeps small counts: the exact greedy order, for little time.
+AUTO_FAST_ABOVE = 100
 #: A prototype swallowed by a new sphere may restart this factor of its radius from its centre.
 PUSH_OUT = 1.001
 #: Random starts per cell when dead prototypes are revived, before the driver gives up for room.
@@ -708,11 +709,12 @@ def pack(
     mode : "auto", "faithful" or "fast"
         ``"faithful"``: the paper's rounds on a fixed grid (with ``batch``), refined only where
         no prototype has room left, before the run would stop for it. ``"fast"``: every
-        candidate within ``FAST_WINDOW`` (20%) of the largest clearance becomes a sphere in one
-        round where it is disjoint from the larger ones, and cells split where their gaps have
+        candidate within a window of the largest clearance (20% up to 3-D, narrower above:
+        ``rounds.fast_window``) becomes a sphere in one round where it is disjoint from the
+        larger ones, and cells split where their gaps have
         become small against them; for large counts (see docs/benchmarks.md for its fill
         against the faithful mode's). ``"auto"`` (the default): fast for more than
-        ``AUTO_FAST_ABOVE`` (100) spheres in 2-D and 3-D, else faithful (and faithful whenever
+        ``AUTO_FAST_ABOVE`` (100) spheres, else faithful (and faithful whenever
         ``batch`` is given); ``params["mode"]`` records the mode run and ``params["mode_why"]``
         why auto chose it.
     restarts : int
@@ -775,7 +777,7 @@ def pack(
     if mode == "fast" and batch != 1:
         raise ParameterError(
             f"batch={batch!r} applies to the faithful mode only: the fast mode takes every candidate "
-            f"within {FAST_WINDOW:.0%} of the largest a round; drop batch or use mode='faithful'"
+            f"within a window of the largest a round ({FAST_WINDOW:.0%} up to 3-D); drop batch or use mode='faithful'"
         )
     on_invalid = _check_run(shape, on_invalid, on_round)
     obstacles = _check_obstacles(obstacles, shape.dim)
@@ -831,9 +833,9 @@ def _check_obstacles(obstacles, dim: int):
 def choose_mode(mode: str, n, dim: int, batch) -> tuple[str, str | None]:
     """The mode a run takes, and why when ``mode == "auto"`` chose it (else None).
 
-    ``"auto"``: fast for more than ``AUTO_FAST_ABOVE`` spheres in ``AUTO_FAST_DIMS``, where its
-    fill matches the faithful mode's sooner; faithful for few spheres, in 4-D and up, and when
-    ``batch`` (a faithful-mode option) is not 1.
+    ``"auto"``: fast for more than ``AUTO_FAST_ABOVE`` spheres, where its fill matches the
+    faithful mode's sooner; faithful for few spheres and when ``batch`` (a faithful-mode option)
+    is not 1.
     """
     if mode not in ("auto", "faithful", "fast"):
         raise ParameterError(f"mode must be 'auto', 'faithful' or 'fast', got {mode!r}")
@@ -841,8 +843,6 @@ def choose_mode(mode: str, n, dim: int, batch) -> tuple[str, str | None]:
         return mode, None
     if batch != 1:
         return "faithful", f"auto: batch={batch} is a faithful-mode option"
-    if dim not in AUTO_FAST_DIMS:
-        return "faithful", f"auto: {dim}-D (the fast mode fills less from 4-D up)"
     if n <= AUTO_FAST_ABOVE:
         return "faithful", f"auto: n={n} is at most {AUTO_FAST_ABOVE}"
     return "fast", f"auto: n={n} is more than {AUTO_FAST_ABOVE} in {dim}-D"

@@ -134,7 +134,7 @@ def test_stop_conditions():
     by_fill = nd.pack(square, n=10_000, fill=0.8, seed=0)
     assert by_fill.stop_reason == "fill"
     assert by_fill.fill >= 0.8 and by_fill.stats.fill[-2] < 0.8
-    by_time = nd.pack(square, n=10**6, time_budget=0.5, seed=0)
+    by_time = nd.pack(square, n=10**6, time_budget=2.0, seed=0)  # 0.5 s placed none on a busy machine
     assert by_time.stop_reason == "time"
     assert 0 < len(by_time) < 10**6 and by_time.verify().ok
 
@@ -297,10 +297,10 @@ def test_a_fast_packing_records_where_its_schedules_stop():
 
 
 @pytest.mark.parametrize("dim, n, batch, chosen", [
-    (2, 101, 1, "fast"), (3, 101, 1, "fast"), (3, 100, 1, "faithful"), (4, 5000, 1, "faithful"),
-    (3, 5000, 4, "faithful"),
+    (2, 101, 1, "fast"), (3, 101, 1, "fast"), (3, 100, 1, "faithful"), (4, 5000, 1, "fast"),
+    (6, 101, 1, "fast"), (5, 100, 1, "faithful"), (3, 5000, 4, "faithful"),
 ])
-def test_auto_mode_is_fast_for_many_spheres_in_2d_and_3d_and_says_why(dim, n, batch, chosen):
+def test_auto_mode_is_fast_for_many_spheres_in_every_dimension_and_says_why(dim, n, batch, chosen):
     mode, why = protosphere.choose_mode("auto", n, dim, batch)
     assert mode == chosen and why.startswith("auto: ")
     assert protosphere.choose_mode("faithful", n, dim, batch) == ("faithful", None)
