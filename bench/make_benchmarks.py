@@ -377,10 +377,8 @@ def auto_mode() -> list[str]:
         "",
         "The fast mode's fill over the faithful mode's at equal counts, and in brackets the seconds of each",
         f"(faithful / fast; medians of {data['repeats']}, seed 0, numba). `*`: `mode=\"auto\"` took the fast mode "
-        f"there when this was measured (above {data['auto_fast_above']} spheres in "
-        f"{' and '.join(f'{d}-D' for d in data['auto_fast_dims'])}); the 4-D rows are the fast mode before issue 47 "
-        "(a window of 0.2 in every dimension). Since then `auto` takes it above 100 spheres in every dimension: "
-        "next section.",
+        f"there when measured (in {' and '.join(f'{d}-D' for d in data['auto_fast_dims'])}); 4-D: before issue 47's "
+        "fast mode (next section), which `auto` now takes above 100 spheres in every dimension.",
         "",
         *table(["shape", "dim", *(f"{count(n)} spheres" for n in counts)], rows),
         *sources("auto_mode_2core.json"),
@@ -389,25 +387,26 @@ def auto_mode() -> list[str]:
 
 def fast_high_dim() -> list[str]:
     data = load("fast_fill_2core_issue47.json")
-    keys = list(dict.fromkeys((row["shape"], row["dim"], row["count"]) for row in data["rows"]))
+    counts = sorted({row["count"] for row in data["rows"]})
+    found = {(row["shape"], row["dim"], row["count"], row["mode"]): row for row in data["rows"]}
     rows = []
-    for shape, dim, n in keys:
-        faithful = first(data["rows"], shape=shape, dim=dim, count=n, mode="faithful")
-        fast = first(data["rows"], shape=shape, dim=dim, count=n, mode="fast")
-        rows.append([shape, str(dim), count(n), str(len(fast["fills"])), f"{faithful['mean_fill']:.4f}",
-                     f"{fast['mean_fill']:.4f}", f"{fast['mean_fill'] / faithful['mean_fill']:.4f}",
-                     f"{max(faithful['spread'], fast['spread']):.4f}",
-                     f"{faithful['median_s']:.1f} / {fast['median_s']:.1f}"])
+    for shape, dim in dict.fromkeys((row["shape"], row["dim"]) for row in data["rows"]):
+        cells = []
+        for n in counts:
+            faithful, fast = found.get((shape, dim, n, "faithful")), found.get((shape, dim, n, "fast"))
+            if faithful is None or fast is None:
+                cells.append("")
+                continue
+            spread = max(faithful["spread"], fast["spread"])
+            cells.append(f"{fast['mean_fill'] / faithful['mean_fill']:.4f} ({spread:.4f}, {len(fast['fills'])})")
+        rows.append([shape, str(dim), *cells])
     return [
         "## The fast mode from 4-D up",
         "",
-        "Mean fill over seeds at equal counts, numba: the fast mode (its window narrowed from 4-D up, ties taken a",
-        "layer at a time: `rounds.fast_window`, `rounds._ties_first`) against the faithful one. Spread: the larger",
-        "of the two modes' (max - min) / mean over the seeds. Seconds (medians; the machine was busy with other",
-        "work) are for orientation only.",
+        "The fast mode's mean fill over the faithful mode's at equal counts (numba), with its narrower window and ties",
+        "(`rounds.fast_window`, `_ties_first`); in brackets the seeds' spread ((max - min) / mean) and their number.",
         "",
-        *table(["shape", "dim", "spheres", "seeds", "faithful fill", "fast fill", "fast / faithful", "spread",
-                "seconds (faithful / fast)"], rows),
+        *table(["shape", "dim", *(f"{count(n)} spheres" for n in counts)], rows),
         *sources("fast_fill_2core_issue47.json"),
     ]
 

@@ -250,7 +250,7 @@ def test_benchmarks_page_is_what_the_script_writes(tmp_path):
                    capture_output=True)
     written, page = out.read_text(), (ROOT / "docs" / "benchmarks.md").read_text()
     assert written == page, "docs/benchmarks.md differs from what bench/make_benchmarks.py writes: run it"
-    assert written.count("\n") <= 320, "docs/benchmarks.md is one page of today's figures (about 300 lines)"
+    assert written.count("\n") <= 330, "docs/benchmarks.md is one page of today's figures (about 300 lines)"
 
 
 def _headings(page: Path) -> list[str]:
