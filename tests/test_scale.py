@@ -107,6 +107,84 @@ def sequential_greedy(centers, radii, margin):
     return kept
 
 
+def sequential_greedy_among(centers, radii, margin, period=None):
+    """The sequential rule, each candidate against all kept so far at once (in a periodic domain
+    between nearest images): for thousands of candidates."""
+    kept = np.empty(0, dtype=np.int64)
+    for i in range(len(radii)):
+        delta = centers[i] - centers[kept] if period is None else period.difference(centers[i], centers[kept])
+        if np.all(np.linalg.norm(delta, axis=1) >= radii[i] + radii[kept] + margin):
+            kept = np.append(kept, i)
+    return kept
+
+
+def counting_pairs(monkeypatch):
+    """The pairs the conflict check decides over, call by call."""
+    import ndpack.drivers.greedy.conflicts as conflicts
+
+    compared = []
+    greedy = conflicts.greedy_over_pairs
+    monkeypatch.setattr(conflicts, "greedy_over_pairs", lambda count, first, second: compared.append(len(first)) or
+                        greedy(count, first, second))
+    return compared
+
+
+@pytest.mark.parametrize("axes", [[True, True], [True, True, False]], ids=["2-D", "3-D, one axis free"])
+def test_dense_candidates_in_a_periodic_box_are_decided_without_listing_their_pairs(monkeypatch, axes):
+    """A fast-mode round in a small periodic box: thousands of prototypes, nearly all capped at
+    the largest radius, nearly all within twice it of each other (32,761 in the unit square with
+    radii up to 0.2 had listed hundreds of millions of pairs, a minute for 5 spheres). The kept
+    ones exclude the rest: the work follows them, and the subset is the sequential rule's."""
+    from ndpack.geometry.period import Period
+
+    compared = counting_pairs(monkeypatch)
+    rng = np.random.default_rng(7)
+    dim = len(axes)
+    period = Period(np.zeros(dim), np.ones(dim), axes)
+    # The prototypes of a grid, cell after cell (the first few all near one corner).
+    side = [40, 128] if dim == 2 else [18, 18, 16]
+    cells = np.stack(np.meshgrid(*[np.arange(n) for n in side], indexing="ij"), axis=-1).reshape(-1, dim)
+    centers = (cells + 0.5 + 0.1 * rng.standard_normal(cells.shape)) / side
+    centers[:, ~np.asarray(axes)] *= 0.3  # a slab along the free axis
+    count = len(centers)
+    radii = np.minimum(0.2, 0.15 + 0.1 * rng.random(count))  # most capped
+    kept = disjoint_greedy(centers, radii, 1e-10, period)
+    np.testing.assert_array_equal(kept, sequential_greedy_among(centers, radii, 1e-10, period))
+    assert 2 <= len(kept) < 20 and sum(compared) < 4 * count
+    # Between nearest images: the kept ones are apart across the box's faces too.
+    delta = period.difference(centers[kept][:, None], centers[kept][None])
+    gaps = np.linalg.norm(delta, axis=2) - radii[kept][:, None] - radii[kept][None]
+    assert np.all(gaps[~np.eye(len(kept), dtype=bool)] >= 1e-10)
+
+
+@pytest.mark.parametrize("small", [0.004, 0.03], ids=["sparse", "crowded"])
+def test_a_few_huge_spheres_among_many_small_ones(monkeypatch, small):
+    """Candidates far larger than the rest, early and late in the order, among sparse small
+    ones (decided over their pairs) or crowded ones (decided block by block, each huge one that
+    survives to its block looking for the kept spheres before it): the sequential rule's subset,
+    in a plain box and a periodic one, over a bounded number of pairs."""
+    compared = counting_pairs(monkeypatch)
+    rng = np.random.default_rng(11)
+    count = 4000
+    centers = rng.random((count, 2))
+    radii = small * (0.5 + 0.5 * rng.random(count))
+    huge = np.array([0, 3, 100, 700, 2500, 3999])  # in priority order: first, early, late, last
+    radii[huge] = [0.3, 0.05, 0.2, 0.25, 0.15, 0.4]
+    kept = disjoint_greedy(centers, radii, 1e-9)
+    np.testing.assert_array_equal(kept, sequential_greedy_among(centers, radii, 1e-9))
+    assert 0 in kept and 3999 not in kept
+    assert sum(compared) < 20 * count
+    # In a periodic box, the huge ones reaching across its faces.
+    from ndpack.geometry.period import Period
+
+    period = Period(np.zeros(2), np.ones(2), [True, True])
+    centers[huge] = [[0.02, 0.5], [0.99, 0.98], [0.5, 0.01], [0.97, 0.3], [0.3, 0.97], [0.6, 0.6]]
+    compared.clear()
+    kept = disjoint_greedy(centers, radii, 1e-9, period)
+    np.testing.assert_array_equal(kept, sequential_greedy_among(centers, radii, 1e-9, period))
+    assert sum(compared) < 20 * count
+
+
 def test_candidates_in_one_gap_are_decided_without_listing_their_pairs(monkeypatch):
     """A 12-D ball on a grid of 2: every one of its 4,096 cells' prototypes finds the centre, and
     the conflict check listed all 8.4 million pairs among them (5.5 s, 1.6 GB) for one sphere.

@@ -14,6 +14,14 @@ import numpy as np
 #: The conflict check searches for this many largest spheres apart (see :func:`few_largest`).
 FEW_LARGE = 64
 
+#: :func:`disjoint_greedy` decides this many candidates first, over all their pairs.
+FIRST_BLOCK = 64
+
+#: Spheres that find more than ``CROWDED`` neighbours each (the mean of a sample of ``SAMPLE``)
+#: are crowded: :func:`disjoint_greedy` decides them in blocks rather than over all their pairs.
+CROWDED = 16
+SAMPLE = 64
+
 
 def few_largest(radii):
     """The few largest of ``radii`` (k,): their positions (at most ``FEW_LARGE``, none among
@@ -41,53 +49,159 @@ def disjoint_greedy(centers, radii, margin, period=None):
 
     Returns (j,) int64 positions, ascending.
 
-    The ``FEW_LARGE`` first are decided first, alone, and the rest that meet one of them kept are
-    dropped. Where that drops at least half the rest (many candidates in one gap: a coarse grid
-    in high dimension, where every cell's prototype finds the same largest gap), the greedy
-    subset is decided over the others only, which never lists the pairs among candidates that a
-    larger one already excludes (4,096 candidates of a 12-D ball on a grid of 2 made 8.4 million
-    pairs, 5.5 s); elsewhere the pairs of all are searched at once, as without it. Either way the
-    result is the same: a sphere a kept one excludes never excludes another.
+    Where a sample of the candidates finds few neighbours each (``CROWDED``; a fast-mode round
+    of thousands of candidates, most of them kept), every pair that may meet is listed at once
+    (:func:`_greedy_by_pairs`). Elsewhere the candidates are decided in blocks of priority,
+    ``FIRST_BLOCK`` first and each block twice the last: a block's candidates that a sphere kept
+    before it excludes are dropped, the rest are decided among themselves over their pairs, and
+    each sphere the block keeps then searches once for the later candidates it excludes. The
+    work so follows the kept spheres and their true neighbours, never the pairs among
+    candidates that a kept one excludes: many candidates in one gap (4,096 prototypes of a 12-D
+    ball on a grid of 2 finding its centre; 32,761 in a small periodic box, all capped at the
+    largest radius) are excluded by the first few kept, where listing their pairs had made 8.4
+    million (5.5 s) and hundreds of millions (a minute for 5 spheres). A block whose survivors
+    are still crowded is cut back to ``FIRST_BLOCK``. The few largest candidates
+    (:func:`few_largest`), where far larger than the rest, are left out of the kept spheres'
+    searches, which would otherwise all be as wide as they are: each of them that survives to
+    its block looks for the kept spheres before it instead. Every pair is decided by
+    :func:`_meet`, the earlier sphere first, so that every path decides as the sequential rule
+    does, to the bit.
     """
+    count = len(radii)
+    if count <= FIRST_BLOCK:
+        return _greedy_among_all(centers, radii, margin, period)
+    frame, boxsize = _frame(centers, widened(2 * radii.max() + margin), period)
+    tree = _kdtree(frame, boxsize)
+    if not _crowded(tree, frame, radii, margin):
+        return _greedy_by_pairs(tree, frame, centers, radii, margin, period)
+    large, cut = few_largest(radii)
+    if radii.max() <= 2 * cut:
+        large = large[:0]  # no far larger ones: the kept spheres' searches may reach them all
+    small = radii.copy()
+    small[large] = 0.0
+    later_small = np.maximum.accumulate(small[::-1])[::-1]  # the largest small radius from each on
+    is_large = np.zeros(count, dtype=bool)
+    is_large[large] = True
+    excluded, kept = np.zeros(count, dtype=bool), np.zeros(count, dtype=bool)
+    live = _Live(tree, None)  # the tree the kept spheres search: the undecided, once most are dropped
+    start, size = 0, FIRST_BLOCK
+    while start < count:
+        stop = min(count, start + size)
+        block = start + np.flatnonzero(~excluded[start:stop])
+        among = is_large[block]
+        if among.any():
+            rivals = _excluded_by_kept(frame, boxsize, centers, radii, margin, period, block[among], kept, start)
+            excluded[rivals] = True
+            block = block[~excluded[block]]
+        if len(block) > FIRST_BLOCK:
+            block_tree = _kdtree(frame[block], boxsize)
+            if size > FIRST_BLOCK and _crowded(block_tree, frame[block], radii[block], margin):
+                size = FIRST_BLOCK  # decide its first few alone: their kept spheres exclude the rest
+                continue
+            chosen = block[_greedy_by_pairs(block_tree, frame[block], centers[block], radii[block], margin, period)]
+        else:
+            chosen = block[_greedy_among_all(centers[block], radii[block], margin, period)]
+        kept[chosen] = True
+        if stop < count and len(chosen):
+            live = live.refreshed(excluded, stop, frame, boxsize)
+            reach = widened(radii[chosen] + later_small[stop] + margin)
+            first, second = _near(live.tree, frame[chosen], reach, chosen)
+            if live.ids is not None:
+                second = live.ids[second]
+            beyond = second >= stop
+            first, second = first[beyond], second[beyond]
+            beyond = ~excluded[second]
+            first, second = first[beyond], second[beyond]
+            excluded[second[_meet(centers, radii, first, second, margin, period)]] = True
+        start, size = stop, 2 * size
+    return np.flatnonzero(kept)
+
+
+def _greedy_among_all(centers, radii, margin, period):
+    """:func:`disjoint_greedy` of a few spheres, over all their pairs."""
     count = len(radii)
     if count <= 1:
         return np.arange(count)
-    head = min(count, FEW_LARGE)
-    first, second = np.triu_indices(head, 1)
+    first, second = np.triu_indices(count, 1)
     meet = _meet(centers, radii, first, second, margin, period)
-    leaders = greedy_over_pairs(head, first[meet], second[meet])
-    if head == count:
-        return leaders
-    tree, frame = _tree(centers, widened(2 * radii.max() + margin), period)
-    found = tree.query_ball_point(frame[leaders], widened(radii[leaders] + radii[head:].max() + margin))
-    lengths = [len(near) for near in found]
-    first = np.repeat(leaders, lengths)
-    second = np.concatenate(found).astype(np.int64)
-    beyond = second >= head
-    first, second = first[beyond], second[beyond]
-    excluded = np.zeros(count, dtype=bool)
-    excluded[second[_meet(centers, radii, first, second, margin, period)]] = True
-    rest = np.flatnonzero(~excluded[head:]) + head
-    if len(rest) <= (count - head) / 2:
-        return np.concatenate([leaders, rest[disjoint_greedy(centers[rest], radii[rest], margin, period)]])
-    return _greedy_by_pairs(tree, frame, centers, radii, margin, period)
+    return greedy_over_pairs(count, first[meet], second[meet])
 
 
-def _tree(centers, reach, period):
-    """A k-d tree of ``centers`` (k, d) for searches within ``reach``, and the points (k, d) to
-    query it with: in a periodic domain a tree that wraps, in its own frame."""
+def _crowded(tree, frame, radii, margin):
+    """Whether the spheres of a k-d ``tree`` (points ``frame``) would list many pairs in
+    :func:`_greedy_by_pairs`: a sample of ``SAMPLE`` of them finds more than ``CROWDED``
+    neighbours each. Searched an eighth of the sample at a time, each spread over the order, and
+    no further once the count is reached (a search of a crowded 12-D round counts thousands)."""
+    _, largest = few_largest(radii)
+    reach = widened(2 * largest + margin)
+    sample = np.linspace(0, len(radii) - 1, min(len(radii), SAMPLE)).astype(np.int64)
+    enough, found = (CROWDED + 1) * len(sample), 0
+    for part in range(8):
+        found += tree.query_ball_point(frame[sample[part::8]], reach, return_length=True).sum()
+        if found > enough:
+            return True
+    return False
+
+
+def _excluded_by_kept(frame, boxsize, centers, radii, margin, period, ids, kept, start):
+    """Which of candidates ``ids`` meet a sphere kept before position ``start``: searched among
+    the kept spheres alone, which are disjoint, so that a search finds few however wide."""
+    before = np.flatnonzero(kept[:start])
+    if len(before) == 0:
+        return before
+    reach = widened(radii[ids] + radii[before].max() + margin)
+    first, second = _near(_kdtree(frame[before], boxsize), frame[ids], reach, ids)
+    first, second = before[second], first  # the kept one first, as everywhere
+    return second[_meet(centers, radii, first, second, margin, period)]
+
+
+def _near(tree, points, reach, ids):
+    """The points of ``tree`` within ``reach`` (m,) of each of ``points`` (m, d): pairs (ids[q],
+    position in the tree), two (p,) int64."""
+    found = tree.query_ball_point(points, reach, return_sorted=False)
+    lengths = np.fromiter(map(len, found), dtype=np.int64, count=len(found))
+    if lengths.sum() == 0:
+        return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
+    return np.repeat(ids, lengths), np.concatenate(found).astype(np.int64, copy=False)
+
+
+class _Live:
+    """The k-d tree the kept spheres of :func:`disjoint_greedy` search, and which candidates its
+    points are (``ids``, None: all): rebuilt over the undecided ones once most of its points are
+    decided or dropped, so that a search finds few it has no use for."""
+
+    def __init__(self, tree, ids):
+        self.tree, self.ids = tree, ids
+
+    def refreshed(self, excluded, stop, frame, boxsize):
+        ids = np.arange(len(excluded)) if self.ids is None else self.ids
+        useful = ~excluded[ids] & (ids >= stop)
+        if len(ids) < 4 * FIRST_BLOCK or 2 * useful.sum() >= len(ids):
+            return self
+        ids = ids[useful]
+        return _Live(_kdtree(frame[ids], boxsize), ids)
+
+
+def _frame(centers, reach, period):
+    """The points (k, d) of a k-d tree of ``centers`` (k, d) for searches within ``reach``, and
+    its box size (None where nothing wraps): in a periodic domain a frame that wraps."""
+    if period is None:
+        return centers, None
+    return period.frame(centers, reach)
+
+
+def _kdtree(frame, boxsize):
     from scipy.spatial import cKDTree
 
-    if period is None:
-        return cKDTree(centers), centers
-    return period.tree(centers, reach)
+    return cKDTree(frame, boxsize=boxsize)
 
 
 def _meet(centers, radii, first, second, margin, period=None):
     """(p,) bool: whether spheres ``first[p]`` and ``second[p]`` come within ``margin`` (one
     formula for every path of :func:`disjoint_greedy`, so that they decide alike to the bit)."""
-    delta = centers[first] - centers[second]
-    if period is not None:
+    if period is None:
+        delta = centers[first] - centers[second]
+    else:
         delta = period.difference(centers[first], centers[second])
     gap = np.linalg.norm(delta, axis=1) - radii[first] - radii[second]
     return (gap < margin) & (first != second)
@@ -95,16 +209,18 @@ def _meet(centers, radii, first, second, margin, period=None):
 
 def _greedy_by_pairs(tree, frame, centers, radii, margin, period=None):
     """:func:`disjoint_greedy` over every pair that may meet, found in the k-d ``tree`` of
-    ``centers`` (whose points are ``frame``, see :func:`_tree`)."""
+    ``centers`` (whose points are ``frame``, see :func:`_frame`)."""
     count = len(radii)
-    # Pairs that may meet: two of the rest within twice their largest radius, and each of the
-    # few largest with any sphere within its radius and the largest.
+    # Pairs that may meet: two of the rest within twice their largest radius, each of the few
+    # largest with any of the rest within its radius and theirs, and the few largest together.
     large, largest = few_largest(radii)
     pairs = [tree.query_pairs(widened(2 * largest + margin), output_type="ndarray")]
     if len(large):
-        partners = tree.query_ball_point(frame[large], widened(radii[large] + radii.max() + margin))
-        lengths = [len(found) for found in partners]
+        partners = tree.query_ball_point(frame[large], widened(radii[large] + largest + margin), return_sorted=False)
+        lengths = np.fromiter(map(len, partners), dtype=np.int64, count=len(partners))
         pairs.append(np.stack([np.repeat(large, lengths), np.concatenate(partners).astype(np.int64)], axis=1))
+        among = np.triu_indices(len(large), 1)
+        pairs.append(np.stack([large[among[0]], large[among[1]]], axis=1))
     pairs = np.concatenate(pairs)
     if len(pairs) == 0:
         return np.arange(count)

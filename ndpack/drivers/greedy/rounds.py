@@ -110,7 +110,8 @@ def _tightest_first(usable, clearance, full):
 
 def fast_window(dim: int) -> float:
     """The fast mode's window in ``dim`` dimensions: ``FAST_WINDOW`` up to 3-D, then narrower as
-    ``FAST_WINDOW * (3 / dim)**3``: 0.084 in 4-D, 0.043 in 5-D, 0.025 in 6-D.
+    ``FAST_WINDOW * (3 / dim)**3``: 0.084 in 4-D, 0.043 in 5-D, 0.025 in 6-D and above (narrower
+    still, a 12-D ball with a hole on a grid of 2 took 30x the time: its rounds place few spheres).
 
     A round's spheres are chosen with the clearances before any of them is placed; a sphere's
     gaps (where the faithful mode would put larger spheres before the window's smaller ones)
@@ -120,19 +121,21 @@ def fast_window(dim: int) -> float:
     them, within the seeds' spread of it (bench/fast_fill.py), for about 1.5x the rounds (5-D
     ball with a hole, 20,000 spheres).
     """
-    return FAST_WINDOW if dim <= 3 else FAST_WINDOW * (3 / dim) ** 3
+    return FAST_WINDOW if dim <= 3 else FAST_WINDOW * (3 / min(dim, 6)) ** 3
 
 
-#: Fast mode from ``TIE_DIMS`` up: candidates within this fraction of the round's largest
+#: Fast mode in ``TIE_DIMS``: candidates within this fraction of the round's largest
 #: uncapped clearance are a tie (a ridge of equal gaps, as in a spherical shell; see :func:`_ties_first`).
 TIE = 1e-3
 #: A tie's candidate that touches no sphere keeps this many of its radii clear of those chosen before it.
 SEED_GAP = 2.0
 #: A tie's candidate touches a sphere when its clearance ball comes within this fraction of its radius of it.
 CONTACT = 0.01
-#: The tie rule's dimensions; measured in 3-D it gained in a cylinder and a shell (0.9%, 0.5%) but
-#: lost 0.4% in a slab (2,000 spheres, three seeds), so 3-D keeps the plain choice for now.
-TIE_DIMS = 4
+#: The tie rule's dimensions, the lowest and highest. Measured in 3-D it gained in a cylinder and a
+#: shell (0.9%, 0.5%) but lost 0.4% in a slab (2,000 spheres, three seeds); in a 12-D shell on a
+#: grid of 2 (every sphere of the largest size) it took 19 rounds for 500 spheres, 30x the time,
+#: for the same fill. Elsewhere the plain choice.
+TIE_DIMS = (4, 6)
 
 
 def _slack(state, points, clearance):
@@ -156,9 +159,9 @@ def _ties_first(state, usable, points, clearance, radii, full):
     """A round's order ``usable`` (j,) and the radii (j,) its conflict check gives them, with ties
     taken as the faithful mode takes them.
 
-    Where several uncapped candidates share the largest clearance (within ``TIE``: a ridge of
-    equal gaps, as between the walls of a spherical shell, where every point of the ridge is a
-    node), the faithful mode places them one by one, each touching those before it, since its
+    In ``TIE_DIMS``, where several uncapped candidates share the largest clearance (within
+    ``TIE``: a ridge of equal gaps, as between the walls of a spherical shell, where every point
+    of the ridge is a node), the faithful mode places them one by one, each touching those before it, since its
     touched prototypes converge again beside the new sphere; a fast round would keep any
     disjoint subset, equal spheres parked at random along the ridge (43 spheres of the largest
     size in a 4-D shell against the faithful mode's 51; 1.9% less fill at 1,000 spheres). So a
@@ -167,7 +170,7 @@ def _ties_first(state, usable, points, clearance, radii, full):
     (the room between is for spheres that will touch both). The others wait for the next round.
     """
     grown = radii[usable]
-    if state.dim < TIE_DIMS:
+    if not TIE_DIMS[0] <= state.dim <= TIE_DIMS[1]:
         return usable, grown
     capped_first, free = usable[full[usable]], usable[~full[usable]]  # free: largest first
     if len(free) < 2:
