@@ -236,7 +236,7 @@ def _parser() -> argparse.ArgumentParser:
     pack.add_argument("--iterations", type=int, default=50, help="prototype steps (default 50)")
     pack.add_argument("--batch", type=int, default=1, help="spheres per round in the faithful mode (default 1)")
     pack.add_argument("--mode", choices=("auto", "faithful", "fast"), default="auto",
-                      help=f"auto (default): fast for more than {AUTO_FAST_ABOVE} spheres in 2-D and 3-D, else "
+                      help=f"auto (default): fast for more than {AUTO_FAST_ABOVE} spheres, else "
                       "faithful; faithful: the paper's rounds, one sphere each; fast: many spheres a round and a "
                       "grid refined where gaps are small, for large counts")
     pack.add_argument("--seed", type=_seed, default=0, help="random seed, an integer >= 0 (default 0)")
