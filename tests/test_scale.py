@@ -46,6 +46,41 @@ def test_index_finds_the_spheres_the_reference_finds(dim):
                                   REFERENCE.near_spheres(lower, upper, reach, moved, radii[:500]))
 
 
+def spheres_on_cell_faces(rng, count, dim):
+    """Spheres and boxes on a 1/64 lattice, in binary exactly: the index's cells (side 1/2**l with
+    the largest radius 1/4) have many centres on their faces, and many spheres come exactly as near
+    a box as its reach. Returns centres, radii, box corners and reaches."""
+    centers = rng.integers(0, 129, (count, dim)) / 64.0
+    radii = rng.choice([1 / 4, 1 / 16, 1 / 64, 1 / 128], count, p=[0.02, 0.18, 0.4, 0.4])
+    lower = rng.integers(0, 120, (300, dim)) / 64.0
+    upper = lower + rng.integers(1, 9, (300, 1)) / 64.0
+    reach = rng.integers(1, 24, 300) / 64.0
+    # And a sphere exactly at each box's reach, beyond its upper face on a random axis.
+    axis = rng.integers(0, dim, 300)
+    planted = upper.copy()
+    planted[np.arange(300), axis] += reach + 1 / 64
+    return np.vstack([centers, planted]), np.append(radii, np.full(300, 1 / 64)), lower, upper, reach
+
+
+@pytest.mark.parametrize("dim", [3, 4, 5])
+def test_index_skips_only_cells_out_of_reach(dim):
+    """A query skips the cells of its window farther than its reach (its corners, most of it from
+    4-D up) before hashing them: spheres on those cells' faces, and exactly at the reach, are
+    still found, as the reference finds them."""
+    rng = np.random.default_rng(20 + dim)
+    centers, radii, lower, upper, reach = spheres_on_cell_faces(rng, 3000, dim)
+    expected, expected_bound = REFERENCE.near_spheres(lower, upper, reach, centers, radii, return_bound=True)
+    got, bound = NumbaBackend().near_spheres(lower, upper, reach, centers, radii, return_bound=True)
+    np.testing.assert_array_equal(got, expected)
+    np.testing.assert_array_equal(bound, expected_bound)
+    # The lattice puts spheres at a box's tightened reach (to the bit where it was not tightened):
+    # the edge case is exercised, and most boxes find some spheres.
+    outside = np.maximum(np.maximum(lower[:, None] - centers, centers - upper[:, None]), 0.0)
+    box_gap = np.sqrt((outside**2).sum(axis=2)) - radii
+    assert np.any(np.abs(box_gap - bound[:, None]) <= 1e-12), "no sphere at a reach"
+    assert np.mean(np.any(expected < len(radii), axis=1)) > 0.5
+
+
 @pytest.mark.parametrize("dim", [2, 3, 6])
 def test_touched_through_the_index_matches_the_reference(dim):
     rng = np.random.default_rng(10 + dim)
@@ -344,6 +379,31 @@ def _device_backends():
     except nd.BackendError:
         pass
     return names
+
+
+@pytest.mark.parametrize("name, precision", [case for case in _device_backends() if case[1] == "float64"])
+def test_device_index_skips_only_cells_out_of_reach(name, precision):
+    """The device kernels skip the cells out of reach as the CPU's do: on the 1/64 lattice (spheres
+    on cell faces and at the reach), the tables are the reference's."""
+    if name == "warp":
+        pytest.importorskip("warp")
+        from ndpack.backends.warp_backend import WarpBackend
+
+        backend = WarpBackend(precision=precision)
+    else:
+        backend = nd.backends.get_backend(name)
+    dim = 3  # the module the other device test compiles
+    centers, radii, lower, upper, reach = spheres_on_cell_faces(np.random.default_rng(30), 3000, dim)
+    points = 0.5 * (lower + upper)
+    store = backend.prototypes(nd.Box(np.zeros(dim), 3 * np.ones(dim)), lower, upper, reach, points,
+                               np.zeros(len(reach)))
+    ids = np.arange(len(reach))
+    _, d_radii, table = store._neighbours(ids, store.device.upload(ids, "index"), centers, radii)
+    got = np.sort(table.numpy() if hasattr(table, "numpy") else table.copy_to_host(), axis=1).astype(np.int64)
+    got[got >= d_radii.shape[0]] = len(radii)
+    expected = REFERENCE.near_spheres(lower, upper, reach, centers, radii)
+    np.testing.assert_array_equal(got[:, : expected.shape[1]], expected)
+    assert np.all(got[:, expected.shape[1]:] == len(radii))
 
 
 @pytest.mark.parametrize("name, precision", _device_backends())

@@ -230,13 +230,13 @@ class NumbaBackend(Backend):
         # rows that overflow it walk again (a walk per pass is a third of this call's time).
         dim = box_lower.shape[1]
         width = self._widths.get(dim, 8)
-        table = np.full((count, width), len(centers), dtype=np.int64)
+        table = np.empty((count, width), dtype=np.int64)  # padded by the kernel
         self._run(namespace, "index_query", count, lower, upper, bound, 1, centers, radii, *index, counts, table)
         widest = int(counts.max())
         self._widths[dim] = max(widest, width // 2)  # one narrow call does not narrow the next
         if widest > width:
             over = np.flatnonzero(counts > width)
-            wide = np.full((len(over), widest), len(centers), dtype=np.int64)
+            wide = np.empty((len(over), widest), dtype=np.int64)
             self._run(namespace, "index_query", len(over), lower[over], upper[over], bound[over], 1, centers, radii,
                       *index, counts[over], wide)
             table = np.concatenate([table, np.full((count, widest - width), len(centers), dtype=np.int64)], axis=1)

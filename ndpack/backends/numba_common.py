@@ -58,6 +58,8 @@ def index_query(lower, upper, bound, counting, centers, radii, origin, top, head
         else:
             counts[b] = index_near(b, lower, upper, bound[b], 1, centers, radii, origin, top, heads, nxt, level_of,
                                    level_head, level_next, level_count, level_rmax, out, b, out.shape[1])[1]
+            for j in range(counts[b], out.shape[1]):  # the padding, here where the row is warm
+                out[b, j] = radii.shape[0]
 '''
 
 #: Central-difference step, as a fraction of the shape's scale: float64 rounding in the

@@ -2,10 +2,11 @@
 
 A greedy packing's radii run from a third of the shape down to a millionth of it, so no single
 grid suits them. The index keeps one hashed grid per octave of radius: level ``l`` has cells of
-side ``top / 2**l`` and holds the spheres of radius about a quarter of that, each in the cell of its
-centre. A query for the spheres near a box visits, per level that holds any sphere, the cells
-within reach of the box, or the level's whole list when that is shorter (the few largest spheres,
-or a level with fewer spheres than cells to visit). Work per query is then bounded by what is near
+side ``top / 2**l`` and holds the spheres of radius a third to a sixth of that, each in the cell
+of its centre. A query for the spheres near a box visits, per level that holds any sphere, the
+cells within reach of the box (skipping the window's corners, farther than that: most of its cells
+from 4-D up), or the level's whole list when that is shorter (the few largest spheres, or a level
+with fewer spheres than cells to visit). Work per query is then bounded by what is near
 the box, not by the packing's size.
 
 Buckets are singly linked lists threaded through the sphere ids (``heads`` per bucket, ``next``

@@ -281,6 +281,29 @@ def index_bucket(level: int, cell: VecD, mask: int):
 
 
 @wp.func
+def index_cell_far(lo: VecD, hi: VecD, middle: VecD, cell: VecD, origin: wp.array(dtype=F), side: F, bound: F,
+                   half: F, counting: int, rmax: F):
+    """Whether no sphere of radius up to ``rmax`` centred in ``cell`` can answer the query of the
+    box ``lo``-``hi``: the Numba kernels' test, with a margin of ``INDEX_SLACK`` cells more."""
+    margin = (F(1e-6) + F(INDEX_SLACK)) * side
+    reach = bound + rmax + margin
+    if counting == 0:
+        reach = bound - half + rmax + margin
+    if reach < F(0.0):
+        return True
+    length2 = F(0.0)
+    for k in range(D):
+        start = origin[k] + cell[k] * side
+        t = F(0.0)
+        if counting == 1:
+            t = wp.max(wp.max(start - hi[k], lo[k] - (start + side)), F(0.0))
+        else:
+            t = wp.max(wp.max(start - middle[k], middle[k] - (start + side)), F(0.0))
+        length2 = length2 + t * t
+    return length2 > reach * reach
+
+
+@wp.func
 def index_near(lo: VecD, hi: VecD, bound: F, counting: int, centers: wp.array(dtype=VecD),
                radii: wp.array(dtype=F), origin: wp.array(dtype=F), top: F, heads: wp.array(dtype=wp.int32),
                nxt: wp.array(dtype=wp.int32), level_of: wp.array(dtype=wp.int32),
@@ -321,10 +344,12 @@ def index_near(lo: VecD, hi: VecD, bound: F, counting: int, centers: wp.array(dt
         if empty == 1:
             continue
         listed = cells > F(level_count[level])
-        s = level_head[level]
-        if not listed:
+        s = int(-1)
+        if listed:
+            s = level_head[level]
+        else:
             cell = low
-            s = heads[index_bucket(level, cell, mask)]
+            cell[0] = cell[0] - F(1.0)  # the odometer's first turn lands on the window's first cell
         while True:
             if s < 0:
                 if listed:
@@ -338,6 +363,8 @@ def index_near(lo: VecD, hi: VecD, bound: F, counting: int, centers: wp.array(dt
                     k += 1
                 if k == D:
                     break
+                if index_cell_far(lo, hi, middle, cell, origin, side, bound, half, counting, level_rmax[level]):
+                    continue
                 s = heads[index_bucket(level, cell, mask)]
                 continue
             mine = listed
