@@ -69,6 +69,7 @@ def main():
     parser.add_argument("--modes", nargs="+", default=["faithful", "fast"])
     parser.add_argument("--faithful-from", type=Path, help="reuse this file's faithful rows")
     parser.add_argument("--out", type=Path)
+    parser.add_argument("--append", action="store_true", help="add the rows to --out's, if it exists")
     args = parser.parse_args()
     earlier = {}
     if args.faithful_from:
@@ -98,6 +99,8 @@ def main():
                     print(f"| {name} | {dim} | {count:,} | {mode} | {row['mean_fill']:.5f} | {row['spread']:.4f} | "
                           f"{ratio} | {row['median_s']:.2f} |", flush=True)
     if args.out:
+        if args.append and args.out.exists():
+            rows = json.loads(args.out.read_text())["rows"] + rows
         write_json(args.out, dict(machine=machine_info(), numba=__import__("numba").__version__, seeds=args.seeds,
                                   rows=rows))
 

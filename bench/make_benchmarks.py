@@ -111,6 +111,28 @@ SOURCES = {
     "fast_fill_2core_issue47.json": Source(
         "2 cores", "07a53d4", "python bench/fast_fill.py --counts 100 1000 --seeds 3 (and --counts 10000 --seeds 1 "
         "--dims 4 5; --dims 3 4 for the periodic box)"),
+    "index_speed_2core_issue47.json": Source(
+        "2 cores", "e557e8c", "python bench/index_speed.py --before e557e8c~1 --repeats 3"),
+    **{f"index_queries_{d}d_2core_issue47.json": Source(
+        "2 cores", "e557e8c", "python bench/index_speed.py --queries {3,4,5} --at 60000 --before e557e8c~1")
+       for d in (3, 4, 5)},
+    "index_speed_h100_warp_versions_issue47.json": Source(
+        "H100, NumPy 2.5", "e557e8c", "bash bench/gpu_issue47.sh window"),
+    "index_speed_h100host_numba_issue47.json": Source(
+        "H100, NumPy 2.5", "e557e8c", "bash bench/gpu_issue47.sh host"),
+    "threads_2core_quiet.json": Source("2 cores", "efd1d94", "python bench/threads.py --repeats 3"),
+    "threads_2core_load2.json": Source("2 cores", "efd1d94", "python bench/threads.py --repeats 3 --load 2"),
+    "threads_2core_load4.json": Source("2 cores", "efd1d94", "python bench/threads.py --repeats 3 --load 4"),
+    "threads_h100host_issue47.json": Source("H100, NumPy 2.5", "e557e8c", "bash bench/gpu_issue47.sh host"),
+    "auto_mode_threads_quiet_2core_issue47.json": Source(
+        "2 cores", "e557e8c", "python bench/auto_mode.py --modes auto --one-thread --repeats 3"),
+    "auto_mode_threads_load2_2core_issue47.json": Source(
+        "2 cores", "e557e8c", "python bench/auto_mode.py --modes auto --one-thread --repeats 3 --load 2"),
+    "voxel_speed_2core_issue47.json": Source("2 cores", "e557e8c", "python bench/voxel_speed.py"),
+    "conflicts_2core_issue47.json": Source("2 cores", "8d1c427", "python bench/conflicts.py"),
+    "fast_fill_2core_issue47_10k.json": Source(
+        "2 cores", "e557e8c", "python bench/fast_fill.py --counts 10000 --seeds 1 --dims 6 --shapes 'ball with a hole' "
+        "simplex 'csg part' --out FILE, then --dims 3 4 --shapes 'periodic box, radii 0.03-0.2' --out FILE --append"),
     "compile_cache_2core_issue19.json": Source(
         "2 cores", "e172723", "python bench/compile_cache.py", "2026-11-24"),
     "compile_cache_h100_issue19.json": Source("H100", "e172723", "bash bench/gpu_issue19.sh start", "2026-11-24"),
@@ -385,12 +407,19 @@ def auto_mode() -> list[str]:
     ]
 
 
+#: The fast mode's fill from 4-D up: the first file, then the rows run later (same spheres: the
+#: code between changed speed only, bit for bit).
+FAST_FILL = ("fast_fill_2core_issue47.json", "fast_fill_2core_issue47_10k.json")
+FAST_FILL_SHAPES = ["ball with a hole", "simplex", "csg part", "periodic box, radii 0.03-0.2"]
+
+
 def fast_high_dim() -> list[str]:
-    data = load("fast_fill_2core_issue47.json")
-    counts = sorted({row["count"] for row in data["rows"]})
-    found = {(row["shape"], row["dim"], row["count"], row["mode"]): row for row in data["rows"]}
+    every = [row for name in FAST_FILL for row in load(name)["rows"]]
+    counts = sorted({row["count"] for row in every})
+    found = {(row["shape"], row["dim"], row["count"], row["mode"]): row for row in every}
     rows = []
-    for shape, dim in dict.fromkeys((row["shape"], row["dim"]) for row in data["rows"]):
+    for shape, dim in sorted(dict.fromkeys((row["shape"], row["dim"]) for row in every),
+                             key=lambda key: (FAST_FILL_SHAPES.index(key[0]), key[1])):
         cells = []
         for n in counts:
             faithful, fast = found.get((shape, dim, n, "faithful")), found.get((shape, dim, n, "fast"))
@@ -407,7 +436,117 @@ def fast_high_dim() -> list[str]:
         "(`rounds.fast_window`, `_ties_first`); in brackets the seeds' spread ((max - min) / mean) and their number.",
         "",
         *table(["shape", "dim", *(f"{count(n)} spheres" for n in counts)], rows),
-        *sources("fast_fill_2core_issue47.json"),
+        *sources(*FAST_FILL),
+    ]
+
+
+def high_dim_speed() -> list[str]:
+    data = load("index_speed_2core_issue47.json")
+    rows = [[row["case"], seconds(row["before"]["median_s"]), seconds(row["after"]["median_s"]),
+             f"{row['speedup']:.2f}x", "yes" if row["before"]["hashes"] == row["after"]["hashes"] else "no"]
+            for row in data["rows"]]
+    query_speedups = []
+    for d in (3, 4, 5):
+        biggest = max(load(f"index_queries_{d}d_2core_issue47.json")["rows"], key=lambda row: row["boxes"])
+        query_speedups.append(f"{biggest['speedup']:.2f}x in {d}-D ({biggest['mean_row']:.0f} spheres a box)")
+    gpu = load("index_speed_h100_warp_versions_issue47.json")
+    host = load("index_speed_h100host_numba_issue47.json")
+    gpu_rows = []
+    for row in gpu["rows"]:
+        numba = first(host["rows"], case=row["case"])["after"]
+        gpu_rows.append([row["case"], *(f"{seconds(row[v]['median_s'])}, {row[v]['fill']:.4f}"
+                                         for v in ("_v_f1ab864", "_v_f7731f1", "after")),
+                         f"{seconds(numba['median_s'])}, {numba['fill']:.4f}"])
+    return [
+        "## 4-D and 5-D at scale: the sphere index",
+        "",
+        "The index's query skips the cells of its window out of reach (its corners: most of it from 4-D up), and a",
+        "level holds spheres of a third to a sixth of its cells' side (`INDEX_FACTOR`). Same spheres, to the bit;",
+        f"2 cores, numba, `mode=\"auto\"`, seed 0, medians of {len(data['rows'][0]['after']['seconds'])}, "
+        "interleaved, every packing verified:",
+        "",
+        *table(["case", "before (`e557e8c~1`)", "now", "speedup", "same spheres"], rows),
+        "The index alone, on a packing's own largest recorded query (median of 3): "
+        f"{', '.join(query_speedups)}.",
+        "",
+        "H100, Warp, fast mode, one run each, seconds and fill: before issue 47 (`f1ab864`: window 0.2), with its",
+        "narrower window (`f7731f1`), and now; the last column is numba on the same host's 16 cores, now. The",
+        "narrower window fills 1.5-2.3% more but takes more rounds, each a set of launches: a cost the GPU",
+        "pays (issue 48's subject).",
+        "",
+        *table(["case", "`f1ab864`", "`f7731f1`", "now", "numba, 16 cores"], gpu_rows),
+        *sources("index_speed_2core_issue47.json", "index_queries_3d_2core_issue47.json",
+                 "index_queries_4d_2core_issue47.json", "index_queries_5d_2core_issue47.json",
+                 "index_speed_h100_warp_versions_issue47.json", "index_speed_h100host_numba_issue47.json"),
+    ]
+
+
+def shared_machine() -> list[str]:
+    names = {"quiet": "threads_2core_quiet.json", "2 busy": "threads_2core_load2.json",
+             "4 busy": "threads_2core_load4.json", "16 cores": "threads_h100host_issue47.json"}
+    cases = list(dict.fromkeys(row["case"] for row in load(names["quiet"])["rows"]))
+    rows = []
+    for case in cases:
+        cells = []
+        for name in names.values():
+            found = load(name)["rows"]
+            before, after, one = (first(found, case=case, threads=t, version=v)["median_seconds"]
+                                  for t, v in (("default", "before"), ("default", "after"), ("1", "after")))
+            cells.append(f"{before:.2f} → {after:.2f} ({one:.2f})")
+        rows.append([case, *cells])
+    quiet = load("auto_mode_threads_quiet_2core_issue47.json")
+    busy = load("auto_mode_threads_load2_2core_issue47.json")
+    counts = sorted({row["count"] for row in quiet["rows"] if not row["shape"].startswith("quick start")})
+    auto_rows = []
+    for shape in dict.fromkeys(row["shape"] for row in quiet["rows"]):
+        cells = []
+        for n in counts:
+            found = [row for row in quiet["rows"] if row["shape"] == shape and row["count"] == n]
+            if not found:
+                cells.append("")
+                continue
+            calm, loaded = found[0], first(busy["rows"], shape=shape, count=n)
+            cells.append(f"{calm['auto_s']:.2f} → {loaded['auto_s']:.2f} ({loaded['auto_one_thread_s']:.2f})")
+        if not any(cells):  # the quick start's example: its own count
+            calm = first(quiet["rows"], shape=shape)
+            loaded = first(busy["rows"], shape=shape)
+            shape = f"{shape}, {count(calm['count'])}"
+            cells = [f"{calm['auto_s']:.2f} → {loaded['auto_s']:.2f} ({loaded['auto_one_thread_s']:.2f})"] + [""] * (
+                len(counts) - 1)
+        auto_rows.append([shape, *cells])
+    ratios = [first(busy["rows"], shape=row["shape"], count=row["count"])["auto_s"] / row["auto_s"]
+              for row in quiet["rows"]]
+    voxel = load("voxel_speed_2core_issue47.json")
+    voxel_rows = [[("quiet" if row["load_processes"] == 0 else f"{row['load_processes']} busy"),
+                   seconds(row["voxel_seconds"]), f"{row['default_threads_s']:.2f} s ({row['one_thread_s']:.2f} s)",
+                   f"{row['default_threads_ratio']:.0f}x ({row['one_thread_ratio']:.0f}x)"] for row in voxel["rows"]]
+    conflicts = load("conflicts_2core_issue47.json")
+    periodic = {row["mode"]: row for row in conflicts["packings"] if row["case"] == "periodic-72"}
+    return [
+        "## Sharing a machine",
+        "",
+        "Numba's parallel launches go to all threads only where the threads would spare more than waking them",
+        "costs (`NumbaBackend._run`). Seconds with the default threads, before → after that change, and on one",
+        "thread in brackets (numba, seed 0, medians of 3, interleaved, fresh process a run; N busy: N spinning",
+        "processes beside the runs on the 2 cores):",
+        "",
+        *table(["case", "2 cores, quiet", "2 busy", "4 busy", "16 cores (H100 host), quiet"], rows),
+        "Every case of `bench/auto_mode.py` and the quick start's example, `mode=\"auto\"`: seconds quiet →",
+        "beside 2 busy processes with the default threads, and (in brackets) busy on one thread. Busy over",
+        f"quiet: {min(ratios):.2f}-{max(ratios):.2f}x.",
+        "",
+        *table(["case", *(f"{count(n)} spheres" for n in counts)], auto_rows),
+        f"{count(voxel['count'])} spheres in the unit cube: SciPy's voxel method ({voxel['voxels']}^3 distance",
+        "transform, `bench/scale.py`'s `voxel_greedy`) against ndpack, `mode=\"auto\"`, default threads (one",
+        f"thread in brackets; medians of {voxel['repeats']}, one voxel run each):",
+        "",
+        *table(["machine", "voxels", "ndpack", "voxels / ndpack"], voxel_rows),
+        "The periodic conflict check: 72 discs of radii 0.01-0.2 in a 2-D periodic box, fast mode",
+        f"{periodic['fast']['seconds']:.2f} s against faithful {periodic['faithful']['seconds']:.2f} s (one run each).",
+        "",
+        *sources(*names.values(), "auto_mode_threads_quiet_2core_issue47.json",
+                 "auto_mode_threads_load2_2core_issue47.json", "voxel_speed_2core_issue47.json",
+                 "conflicts_2core_issue47.json"),
     ]
 
 
@@ -659,7 +798,8 @@ def tiles() -> list[str]:
     ]
 
 
-SECTIONS = (intro, scale_h100, scale_2core, other_shapes_h100, auto_mode, fast_high_dim, compile_once, tape,
+SECTIONS = (intro, scale_h100, scale_2core, other_shapes_h100, auto_mode, fast_high_dim, high_dim_speed,
+            shared_machine, compile_once, tape,
             mesh_queries, fill_against_count, pictures, beds, coverings, many_parts, tiles)
 
 
