@@ -46,7 +46,10 @@ def interrupt(arguments, when: str, cwd, timeout: float = 120):
     """Run ``ndpack cover ARGUMENTS``, send SIGINT once stderr shows ``when``; returns the exit
     status, the seconds from the signal to the exit, stdout and stderr."""
     process = subprocess.Popen([sys.executable, "-c", TERMINAL, "cover", *arguments], cwd=cwd,
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, env={**os.environ, "COLUMNS": "200"})
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, env={**os.environ, "COLUMNS": "200"},
+                               # Ctrl-C as a terminal delivers it: a test run started in the background
+                               # (`cmd &` without job control) ignores SIGINT, and so would this child.
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     seen, started = b"", time.monotonic()
     os.set_blocking(process.stderr.fileno(), False)
     while when.encode() not in seen:
