@@ -75,6 +75,10 @@ SOURCES = {
         "H100, NumPy 2.5", "4210e2b", "bash bench/gpu_issue46.sh warp", "2026-11-27"),
     "scale_million_h100_numba_issue46.json": Source(
         "H100, NumPy 2.5", "4210e2b", "bash bench/gpu_issue46.sh numba", "2026-11-27"),
+    "profile_kernels_h100_armadillo_issue48.json": Source("H100, NumPy 2.5", "95b5a5f", "bash bench/gpu_issue48.sh"),
+    "work_model_2core_armadillo_100k.json": Source(
+        "2 cores", "95b5a5f", "python bench/work_model.py --mesh armadillo.obj --count 100000 "
+        "--against bench/results/profile_kernels_h100_armadillo_issue48.json"),
     "tiled_1M_h100_warp.json": Source("H100", "e7f6fee", "bash bench/gpu_issue25.sh gpu"),
     "tiled_1M_h100_numba.json": Source("H100", "e7f6fee", "bash bench/gpu_issue25.sh cpu"),
     "tiled_10M_h100_warp_alone.json": Source(
@@ -272,9 +276,19 @@ def scale_h100() -> list[str]:
     arm_1m, cube_1m = (million["warp"][case] for case in ("armadillo, 99,976 triangles", "unit cube"))
     arm_1m_cpu, cube_1m_cpu = (million["numba"][case] for case in ("armadillo, 99,976 triangles", "unit cube"))
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
-    profile = load("profile_kernels_h100_issue20_step10.json")
-    warp, cuda = profile["warp"], profile["numba-cuda"]
-    launches, moving = profile["warp"]["kernels"]["move_ids[polish]"][:2]
+    model = load("work_model_2core_armadillo_100k.json")
+    gpu = model["against"]
+    counted, walks = model["launches"], model["walks"]
+    moves = sum(entry["launches"] for name, entry in counted["kernels"].items() if name.startswith("move_ids"))
+    split = [["move launches", f"{gpu['gpu_move_s']:.2f} s",
+              f"{moves} launches; slowest prototypes' walks {walks['critical_path_nodes']:,.0f} nodes",
+              f"{1e6 * gpu['seconds_per_critical_node']:.2f} us a node"],
+             ["other launches", f"{gpu['gpu_other_s']:.2f} s",
+              f"{counted['launches'] - moves} launches",
+              f"{1e3 * gpu['seconds_per_other_launch']:.2f} ms a launch"],
+             ["host, between", f"{gpu['gpu_median_s'] - gpu['gpu_device_s']:.2f} s",
+              f"{counted['syncs']} synchronisations, {counted['rounds']} rounds",
+              f"{1e3 * gpu['host_seconds_per_sync']:.2f} ms a synchronisation"]]
 
     def medians(rows, version=None):
         where = {"version": version} if version else {}
@@ -303,16 +317,16 @@ def scale_h100() -> list[str]:
         f"{cube_1m_cpu['seconds'] / cube_1m['seconds']:.1f}x on the cube;",
         f"its armadillo run reached 100,000 spheres after {seconds(arm_1m['time_to']['100000'])}.",
         "",
-        f"What limits speed: with every launch synchronised to time it, the device computed {seconds(warp['device'])}",
-        f"of Warp's {seconds(warp['wall'])} armadillo packing to 100,000 ({seconds(cuda['device'])} of "
-        f"{seconds(cuda['wall'])} on numba-cuda), {seconds(moving)} of it in",
-        f"{launches} move launches, each as long as its slowest prototype's walk of the mesh tree. The rest is the",
-        f"host's side of {warp['rounds']} rounds (choosing spheres, splitting cells, launches, synchronisations),",
-        "while the device waits: a round still goes back and forth between host and device.",
+        "What limits speed (`bench/work_model.py`, issue 48): the armadillo at 100,000 (Warp, seed 0,",
+        f"{gpu['gpu_median_s']:.2f} s unprofiled) with every launch timed on the device, beside the work counted on",
+        f"the 2-core machine (the same launches, kernel by kernel: {'yes' if gpu['same_launches'] else 'no'}). A move "
+        "launch lasts as long as its slowest thread's chain of tree nodes.",
         "",
+        *table(["part", "H100", "counted on the CPU", "per unit"], split),
         *sources("round_time_h100_issue20_step10c.json", "round_time_h100_cube_issue20_step7.json",
                  "scale_million_h100_warp_issue46.json", "scale_million_h100_numba_issue46.json",
-                 "profile_kernels_h100_issue20_step10.json", "tiled_10M_h100_warp_alone.json"),
+                 "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48.json",
+                 "work_model_2core_armadillo_100k.json"),
     ]
 
 

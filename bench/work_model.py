@@ -1,0 +1,260 @@
+"""The work a fast-mode packing gives a GPU, counted on the CPU: what predicts the GPU's time.
+
+    python bench/work_model.py --mesh ../shared/data/meshes/armadillo.obj --count 100000 \\
+        --against bench/results/profile_kernels_h100_armadillo_issue48.json \\
+        --out bench/results/work_model_2core_armadillo_100k.json [--parts launches walks]
+
+Two runs of the same packing (fast mode, seed 0), each counting what its backend cannot show:
+
+- ``launches``: the device store (``DevicePrototypes``) on Warp's CPU device with a GPU's
+  policies (``launch_bound``: polishes ahead in the move launch; a move spread over ``SPREAD_MAX``
+  threads), so that its host logic is the GPU's: per round and in all, the launches of each kernel
+  (``move_ids`` split into moves, moves with a polish ahead, and polishes, as
+  ``bench/profile_kernels.py`` splits them), their threads, and the host-device synchronisations
+  (each ``fetch`` and ``synchronize``: a round trip that stalls the GPU's queue).
+- ``walks``: numba on one thread, with the converge kernel's text instrumented here (not in the
+  package): per converge launch and per prototype, the mesh-tree nodes visited (every walk of the
+  tree, ``nearest_element``'s above all) and the distance evaluations (``sd_feature`` calls). A
+  launch on a GPU lasts about as long as its slowest thread, so a launch's critical path is its
+  largest prototype's node count (numba makes a move with a polish ahead two launches, the GPU
+  one: their paths are summed, an upper bound); the table gives their sum over the run against
+  the mean's, and the threads a launch has (a GPU keeps about 270,000 resident on an H100).
+
+``--against`` sets the counts beside a GPU run of the same packing (``bench/profile_kernels.py``,
+every launch timed on the device): whether the launches match, kernel by kernel, and the constants
+the GPU's times imply (seconds per critical-path node of a move launch, per other launch, per
+synchronisation on the host), which predict the GPU's time from the next change's counts.
+
+Counting changes nothing in the packing: the instrumented kernels write their counts into a
+tail appended to the shape's numbers, which no shape reads. The CPU runs take minutes at 100,000
+spheres (Warp's CPU device runs one thread).
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+import ndpack as nd
+from ndpack.backends.prototypes import SPREAD_MAX
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import machine_info, write_json
+
+#: Slots at the end of the instrumented shape's numbers: the nodes and evaluations counters,
+#: then two per prototype of a converge launch.
+COUNTERS = 2
+
+
+# ------------------------------------------------------------------------------------ launches
+class LaunchCounter:
+    """Counts the device adapter's launches and synchronisations, per round."""
+
+    def __init__(self):
+        self.kernels = collections.defaultdict(lambda: [0, 0, 0])  # launches, threads, most threads
+        self.syncs = 0
+        self.rounds = []  # per round: {"launches", "syncs", "move_threads"}
+        self._mark = (0, 0, 0)
+
+    def launch(self, name, threads, args):
+        if name == "move_ids":  # args end with polish, spread, polish_steps, polish_low, polish_from
+            name = "move_ids[polish]" if args[-5] else "move_ids[move+ahead]" if args[-2] < 1e300 else "move_ids[move]"
+        entry = self.kernels[name]
+        entry[0] += 1
+        entry[1] += threads
+        entry[2] = max(entry[2], threads)
+
+    def round_done(self):
+        launches = sum(entry[0] for entry in self.kernels.values())
+        moves = sum(entry[1] for name, entry in self.kernels.items() if name.startswith("move_ids"))
+        last = self._mark
+        self.rounds.append(dict(launches=launches - last[0], syncs=self.syncs - last[1], move_threads=moves - last[2]))
+        self._mark = (launches, self.syncs, moves)
+
+
+def count_launches(shape, count, seed):
+    """Pack on Warp's CPU device with the launches and synchronisations counted."""
+    from ndpack.backends import warp_backend
+
+    counter = LaunchCounter()
+    adapter = warp_backend._WarpDevice
+    saved = adapter.launch, adapter.fetch, adapter.synchronize
+
+    def launch(self, name, threads, *args):
+        if threads:
+            counter.launch(name, threads, args)
+        return saved[0](self, name, threads, *args)
+
+    def fetch(self, *pairs):
+        counter.syncs += 1
+        return saved[1](self, *pairs)
+
+    def synchronize(self):
+        counter.syncs += 1
+        return saved[2](self)
+
+    adapter.launch, adapter.fetch, adapter.synchronize = launch, fetch, synchronize
+    try:
+        backend = nd.backends.get_backend("warp", device="cpu")
+        backend.launch_bound, backend.move_spread = True, SPREAD_MAX  # the GPU's policies (see gpu_policy)
+        nd.pack(shape, 200, mode="fast", backend=backend, progress=False)  # compile
+        counter.__init__()
+        started = time.perf_counter()
+        packing = nd.pack(shape, count, mode="fast", backend=backend, seed=seed, progress=False,
+                          on_round=lambda _: counter.round_done())
+        seconds = time.perf_counter() - started
+    finally:
+        adapter.launch, adapter.fetch, adapter.synchronize = saved
+    kernels = {name: dict(launches=v[0], threads=v[1], most_threads=v[2])
+               for name, v in sorted(counter.kernels.items())}
+    return dict(backend="warp, cpu", seconds=seconds, spheres=len(packing), fill=float(packing.fill),
+                rounds=len(counter.rounds), launches=sum(v["launches"] for v in kernels.values()),
+                syncs=counter.syncs, kernels=kernels, per_round=counter.rounds)
+
+
+# --------------------------------------------------------------------------------------- walks
+def counting_nodes(text: str) -> str:
+    """The shape's program text with a counter of the mesh-tree nodes its walks visit (the last
+    slot of ``prm``): the nearest element's walk, and any other walk of the tree (a winding number's)."""
+    nodes = "node = pending[top]\n"
+    assert nodes in text, "nearest_element's walk is not where this script expects it"
+    return text.replace(nodes, nodes + "        prm[prm.shape[0] - 1] += 1.0\n")
+
+
+def counting_prototypes(text: str) -> str:
+    """The backend's kernel text with a counter of distance evaluations (the second-last slot of
+    ``prm``), and a converge launch writing each prototype's two counts into the tail of ``prm``."""
+    evaluation = "    feature = sd_feature(x, prm, hint, gap_min)\n"
+    assert evaluation in text, "nearest_obstacle's evaluation is not where this script expects it"
+    text = text.replace(evaluation, "    prm[prm.shape[0] - 2] += 1.0\n" + evaluation)
+    call = ("        converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, "
+            "out_points,\n                     out_clearance)\n")
+    assert call in text, "converge_all is not where this script expects it"
+    return text.replace(call, (
+        "        nodes = prm[prm.shape[0] - 1]\n"
+        "        evaluations = prm[prm.shape[0] - 2]\n" + call +
+        "        prm[prm.shape[0] - 3 - 2 * i] = prm[prm.shape[0] - 1] - nodes\n"
+        "        prm[prm.shape[0] - 4 - 2 * i] = prm[prm.shape[0] - 2] - evaluations\n"))
+
+
+def count_walks(shape, count, seed, most_points):
+    """Pack on numba (one thread) with the converge kernel counting its tree walks."""
+    from ndpack.backends import numba_backend, numba_common
+    from ndpack.kernels import compile as kernel_compile
+    from ndpack.kernels.compiled import compiled_program
+
+    flat = compiled_program(shape)
+    program = flat.program
+    source = program.source
+    program.source = lambda target, *rest: (counting_nodes(source(target, *rest)) if target == "numba"
+                                            else source(target, *rest))
+    text = counting_prototypes(numba_common.KERNELS + numba_common.ENTRIES)
+    namespace = kernel_compile.numba_namespace(program, "cpu", text, numba_common._jit)
+    program.source = source
+    params = np.concatenate([flat.params, np.zeros(COUNTERS + 2 * most_points)])
+    launches = []
+    backend = numba_backend.NumbaBackend(threads=1)
+    backend.launch_bound = True  # the GPU's rounds: polishes ahead (its two launches are one on a GPU)
+    original_kernels, original_run = backend._kernels, backend._run
+
+    def kernels(shape_):
+        _, _, h = original_kernels(shape_)
+        return namespace, params, h
+
+    def run(namespace_, name, units, *args):
+        result = original_run(namespace_, name, units, *args)
+        if name == "converge_all" and namespace_ is namespace:
+            points = len(args[0])
+            if points > most_points:
+                raise RuntimeError(f"a converge launch of {points:,} prototypes: pass --most-points above it")
+            tail = params[len(params) - COUNTERS - 2 * points:len(params) - COUNTERS][::-1]
+            nodes, evaluations = tail[0::2], tail[1::2]
+            launches.append(dict(prototypes=points, steps=len(args[10]), nodes=float(nodes.sum()),
+                                 most_nodes=float(nodes.max(initial=0)), evaluations=float(evaluations.sum()),
+                                 most_evaluations=float(evaluations.max(initial=0))))
+        return result
+
+    backend._kernels, backend._run = kernels, run
+    started = time.perf_counter()
+    packing = nd.pack(shape, count, mode="fast", backend=backend, seed=seed, progress=False)
+    seconds = time.perf_counter() - started
+    nodes = sum(launch["nodes"] for launch in launches)
+    critical = sum(launch["most_nodes"] for launch in launches)
+    prototypes = sum(launch["prototypes"] for launch in launches)
+    return dict(backend="numba, 1 thread, instrumented", seconds=seconds, spheres=len(packing),
+                fill=float(packing.fill), converge_launches=len(launches), prototypes_moved=prototypes,
+                nodes=nodes, evaluations=sum(launch["evaluations"] for launch in launches),
+                critical_path_nodes=critical, mean_path_nodes=nodes / max(prototypes, 1),
+                critical_over_mean=critical / max(sum(launch["nodes"] / max(launch["prototypes"], 1)
+                                                      for launch in launches), 1e-300),
+                launches=launches)
+
+
+def against(result: dict, profile: dict) -> dict:
+    """The counts beside a GPU run of the same packing (``bench/profile_kernels.py``'s JSON, one
+    backend): launches per kernel on both, and what the GPU's times imply per unit of counted work,
+    the constants a prediction uses: a move launch's seconds per node of its critical path, the
+    other launches' seconds each, and the host's seconds per synchronisation (its time beside the
+    device's, over the synchronisations)."""
+    gpu = next(iter(profile.values()))
+    counted = result["launches"]["kernels"]
+    rows = [dict(kernel=name, cpu_launches=counted.get(name, {}).get("launches", 0), gpu_launches=entry[0],
+                 gpu_seconds=entry[1]) for name, entry in sorted(gpu["kernels"].items(), key=lambda item: -item[1][1])]
+    moves = sum(entry[1] for name, entry in gpu["kernels"].items() if name.startswith("move_ids"))
+    others = sum(entry[1] for name, entry in gpu["kernels"].items() if not name.startswith("move_ids"))
+    other_launches = sum(entry[0] for name, entry in gpu["kernels"].items() if not name.startswith("move_ids"))
+    host = gpu["median"] - gpu["device"]
+    return dict(rows=rows, same_launches=all(row["cpu_launches"] == row["gpu_launches"] for row in rows),
+                gpu_median_s=gpu["median"], gpu_device_s=gpu["device"], gpu_move_s=moves, gpu_other_s=others,
+                seconds_per_critical_node=moves / result["walks"]["critical_path_nodes"],
+                seconds_per_other_launch=others / other_launches,
+                host_seconds_per_sync=host / result["launches"]["syncs"])
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--mesh", help="a mesh file (else the unit cube)")
+    parser.add_argument("--count", type=int, default=100_000)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--parts", nargs="+", default=["launches", "walks"], choices=["launches", "walks"])
+    parser.add_argument("--most-points", type=int, default=2_000_000, help="room for a converge launch's counts")
+    parser.add_argument("--against", type=Path, help="a GPU run's bench/profile_kernels.py JSON, same packing")
+    parser.add_argument("--out", type=Path)
+    args = parser.parse_args()
+    shape = nd.TriangleMesh.load(args.mesh) if args.mesh else nd.Box(np.zeros(3), np.ones(3))
+    result = dict(machine=machine_info(), shape=args.mesh or "unit cube", count=args.count, seed=args.seed,
+                  command="python bench/work_model.py " + " ".join(sys.argv[1:]))
+    if "launches" in args.parts:
+        result["launches"] = found = count_launches(shape, args.count, args.seed)
+        print(f"device store (Warp CPU): {found['rounds']} rounds, {found['launches']:,} launches, "
+              f"{found['syncs']:,} synchronisations, {found['seconds']:.1f} s")
+        for name, entry in found["kernels"].items():
+            print(f"  {name:24s} {entry['launches']:6,} launches, {entry['threads'] / entry['launches']:10,.0f} "
+                  f"threads a launch (most {entry['most_threads']:,})")
+    if "walks" in args.parts:
+        result["walks"] = found = count_walks(shape, args.count, args.seed, args.most_points)
+        print(f"converge walks (numba, 1 thread): {found['converge_launches']} launches, "
+              f"{found['prototypes_moved']:,.0f} prototypes moved, {found['nodes']:,.0f} tree nodes, "
+              f"{found['evaluations']:,.0f} distance evaluations; a launch's slowest prototype summed over "
+              f"launches: {found['critical_path_nodes']:,.0f} nodes, {found['critical_over_mean']:.1f}x the "
+              f"mean prototype's ({found['seconds']:.1f} s)")
+    if args.against and "launches" in result and "walks" in result:
+        result["against"] = found = against(result, json.loads(args.against.read_text()))
+        print(f"against {args.against.name}: same launches per kernel: {found['same_launches']}; the GPU's "
+              f"{found['gpu_median_s']:.2f} s = {found['gpu_move_s']:.2f} s of moves "
+              f"({1e6 * found['seconds_per_critical_node']:.2f} us a critical-path node) + "
+              f"{found['gpu_other_s']:.2f} s of other launches ({1e3 * found['seconds_per_other_launch']:.3f} ms each) "
+              f"+ {found['gpu_median_s'] - found['gpu_device_s']:.2f} s on the host "
+              f"({1e3 * found['host_seconds_per_sync']:.2f} ms a synchronisation)")
+    if args.out:
+        write_json(args.out, result)
+
+
+if __name__ == "__main__":
+    main()
