@@ -81,6 +81,29 @@ def test_index_skips_only_cells_out_of_reach(dim):
     assert np.mean(np.any(expected < len(radii), axis=1)) > 0.5
 
 
+@pytest.mark.parametrize("dim", [3, 5])
+def test_index_finds_tiny_spheres_far_from_the_origin(dim):
+    """Cells of a billionth at coordinates of a thousand (a scanned part in millimetres, packed
+    down to tiny gaps), where a unit in the last place is a hundred times the millionth of a cell
+    that widens a skipped cell: the spheres sit on their level's cells' faces, a unit in the last
+    place either side, each box has one at its reach, and the tables are the reference's."""
+    rng = np.random.default_rng(40 + dim)
+    side = 4 * 0.3 * 0.5**31  # the level of radius 1e-9 under a largest radius of 0.3
+    cells = np.round(1000.0 / side) + rng.integers(-50, 50, (2000, dim))
+    centers = cells * side + rng.choice([-1, 0, 1], (2000, dim)) * np.spacing(1000.0)
+    radii = np.append(np.full(1999, 1e-9), 0.3)
+    centers[-1] = 990.0  # the largest sphere, far away: it sets the levels
+    lower = centers[:300] + rng.uniform(2e-9, 3e-8, (300, dim))
+    upper = lower + 1e-8
+    reach = rng.uniform(1e-9, 2e-8, 300)
+    planted = upper.copy()
+    planted[:, 0] += reach + 1e-9
+    centers, radii = np.vstack([centers, planted]), np.append(radii, np.full(300, 1e-9))
+    expected = REFERENCE.near_spheres(lower, upper, reach, centers, radii)
+    np.testing.assert_array_equal(NumbaBackend().near_spheres(lower, upper, reach, centers, radii), expected)
+    assert np.mean(np.any(expected < len(radii), axis=1)) > 0.5
+
+
 @pytest.mark.parametrize("dim", [2, 3, 6])
 def test_touched_through_the_index_matches_the_reference(dim):
     rng = np.random.default_rng(10 + dim)

@@ -333,9 +333,9 @@ def touches(i, points, clearance, centers, radii):
 # is each level's largest radius.
 
 #: A level holds the spheres of radius a third to a sixth of its cells' side. Measured on the
-#: queries of 3-D to 5-D packings (60,000-95,000 spheres, bench/index_query.py): 3 was as fast as
-#: 4 in 3-D and 1.2-1.9x faster in 4-D and 5-D, where a cell of side 4r holds up to 200 spheres
-#: of radius r/2 to r; 2 and 8 were slower (more cells, or more spheres a cell).
+#: queries of 3-D to 5-D packings (60,000-95,000 spheres; bench/index_speed.py --queries, with
+#: this edited): 3 was as fast as 4 in 3-D and 1.2-1.9x faster in 4-D and 5-D, where a cell of
+#: side 4r holds up to 200 spheres of radius r/2 to r; 2, 2.5, 3.5 and 8 were slower.
 INDEX_FACTOR = 3.0
 
 
@@ -377,14 +377,14 @@ def index_insert(s, centers, radii, origin, top, heads, nxt, level_of, level_hea
     level_rmax[level] = max(level_rmax[level], radii[s])
 
 
-def index_cell_far(b, lower, upper, cell, origin, side, bound, half, counting, rmax):
+def index_cell_far(b, lower, upper, cell, origin, side, bound, half, counting, rmax, margin):
     """Whether no sphere of radius up to ``rmax`` centred in ``cell`` can answer box ``b``'s query:
     the cell lies farther than ``bound + rmax`` from the box (``counting`` 1, the box's gap), or
-    than ``bound - half + rmax`` from its centre (0, the centre's gap). The window's corners are
-    most of its cells from 4-D up (a ball fills 16% of its cube in 5-D), so skipping them before
-    the hash spares most of a query there. A margin of a millionth of a cell keeps a sphere on a
-    cell's face, placed there by rounding, from being missed."""
-    reach = bound + rmax + 1e-6 * side if counting == 1 else bound - half + rmax + 1e-6 * side
+    than ``bound - half + rmax`` from its centre (0, the centre's gap), with ``margin`` more for
+    the rounding that put a centre near a face in this cell. The window's corners are most of its
+    cells from 4-D up (a ball fills 16% of its cube in 5-D), so skipping them before the hash
+    spares most of a query there."""
+    reach = (bound + rmax if counting == 1 else bound - half + rmax) + margin
     if reach < 0.0:
         return True
     length2 = 0.0
@@ -442,6 +442,13 @@ def index_near(b, lower, upper, bound, counting, centers, radii, origin, top, he
         if empty:
             continue
         listed = cells > level_count[level]
+        # Rounding may have put a centre a millionth of a cell, or a few units in the last place
+        # of its coordinates, across a face: a cell is skipped only beyond that much more, on
+        # every axis (tiny cells far from the origin included).
+        extent = 0.0
+        for k in range(D):
+            extent = max(extent, abs(origin[k]) + max(abs(low[k]), abs(high[k] + 1.0)) * side)
+        margin = math.sqrt(D) * (1e-6 * side + 1e-15 * extent)
         s = level_head[level] if listed else -1
         if not listed:
             for k in range(D):
@@ -460,7 +467,8 @@ def index_near(b, lower, upper, bound, counting, centers, radii, origin, top, he
                     k += 1
                 if k == D:
                     break
-                if index_cell_far(b, lower, upper, cell, origin, side, bound, half, counting, level_rmax[level]):
+                if index_cell_far(b, lower, upper, cell, origin, side, bound, half, counting, level_rmax[level],
+                                  margin):
                     continue
                 s = heads[index_bucket(level, cell, mask)]
                 continue

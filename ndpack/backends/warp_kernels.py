@@ -267,6 +267,7 @@ def gather_ids(ids: wp.array(dtype=wp.int32), points: wp.array(dtype=VecD), clea
 #: neighbouring cell, so they are widened by this many cells and a bucket's spheres are taken
 #: without checking their cell (extra spheres in a table are harmless, missing ones are not).
 INDEX_SLACK = wp.constant(0.0 if F is wp.float64 else 1.0)
+INDEX_ROOT_D = wp.constant(float(D) ** 0.5)  # a margin on every axis, as one distance
 
 
 @wp.func
@@ -282,10 +283,9 @@ def index_bucket(level: int, cell: VecD, mask: int):
 
 @wp.func
 def index_cell_far(lo: VecD, hi: VecD, middle: VecD, cell: VecD, origin: wp.array(dtype=F), side: F, bound: F,
-                   half: F, counting: int, rmax: F):
+                   half: F, counting: int, rmax: F, margin: F):
     """Whether no sphere of radius up to ``rmax`` centred in ``cell`` can answer the query of the
-    box ``lo``-``hi``: the Numba kernels' test, with a margin of ``INDEX_SLACK`` cells more."""
-    margin = (F(1e-6) + F(INDEX_SLACK)) * side
+    box ``lo``-``hi``: the Numba kernels' test."""
     reach = bound + rmax + margin
     if counting == 0:
         reach = bound - half + rmax + margin
@@ -344,6 +344,11 @@ def index_near(lo: VecD, hi: VecD, bound: F, counting: int, centers: wp.array(dt
         if empty == 1:
             continue
         listed = cells > F(level_count[level])
+        # The Numba kernels' margin for rounding across a face, with INDEX_SLACK cells more.
+        extent = F(0.0)
+        for k in range(D):
+            extent = wp.max(extent, wp.abs(origin[k]) + wp.max(wp.abs(low[k]), wp.abs(high[k] + F(1.0))) * side)
+        margin = F(INDEX_ROOT_D) * ((F(1e-6) + slack) * side + F(1e-15) * extent)
         s = int(-1)
         if listed:
             s = level_head[level]
@@ -363,7 +368,8 @@ def index_near(lo: VecD, hi: VecD, bound: F, counting: int, centers: wp.array(dt
                     k += 1
                 if k == D:
                     break
-                if index_cell_far(lo, hi, middle, cell, origin, side, bound, half, counting, level_rmax[level]):
+                if index_cell_far(lo, hi, middle, cell, origin, side, bound, half, counting, level_rmax[level],
+                                  margin):
                     continue
                 s = heads[index_bucket(level, cell, mask)]
                 continue
