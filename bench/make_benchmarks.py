@@ -46,6 +46,8 @@ MACHINES = {
                                "3.12.3", "2.5.2", "numba 0.68.0, Warp 1.19.0"),
     "H200": Machine("NVIDIA H200 of the same pool (driver 580.159.04), 16-core Intel Xeon host",
                     "3.12.3", "2.4.6", "numba 0.68.0, numba-cuda 0.30.4, Warp 1.19.0"),
+    "H200, NumPy 2.5": Machine("NVIDIA H200 of the same pool (driver 580.159.04), 16-core Intel Xeon host",
+                               "3.12.3", "2.5.2", "numba 0.68.0, Warp 1.19.0"),
 }
 
 
@@ -79,6 +81,16 @@ SOURCES = {
     "work_model_2core_armadillo_100k.json": Source(
         "2 cores", "95b5a5f", "python bench/work_model.py --mesh armadillo.obj --count 100000 "
         "--against bench/results/profile_kernels_h100_armadillo_issue48.json"),
+    "profile_kernels_h200_armadillo_issue48.json": Source("H200, NumPy 2.5", "993d9c9", "bash bench/gpu_issue48.sh"),
+    "profile_kernels_h200_armadillo20k_issue48.json": Source(
+        "H200, NumPy 2.5", "993d9c9", "bash bench/gpu_issue48.sh small"),
+    "work_model_2core_armadillo_100k_h200.json": Source(
+        "2 cores", "993d9c9", "python bench/work_model.py --mesh armadillo.obj --count 100000 "
+        "--against bench/results/profile_kernels_h200_armadillo_issue48.json"),
+    "work_model_2core_armadillo20k_100k_h200.json": Source(
+        "2 cores", "993d9c9", "python bench/work_model.py --mesh tests/data/meshes/armadillo-20k.ply --count 100000 "
+        "--constants bench/results/work_model_2core_armadillo_100k_h200.json "
+        "--against bench/results/profile_kernels_h200_armadillo20k_issue48.json"),
     "tiled_1M_h100_warp.json": Source("H100", "e7f6fee", "bash bench/gpu_issue25.sh gpu"),
     "tiled_1M_h100_numba.json": Source("H100", "e7f6fee", "bash bench/gpu_issue25.sh cpu"),
     "tiled_10M_h100_warp_alone.json": Source(
@@ -277,6 +289,8 @@ def scale_h100() -> list[str]:
     arm_1m_cpu, cube_1m_cpu = (million["numba"][case] for case in ("armadillo, 99,976 triangles", "unit cube"))
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
     model = load("work_model_2core_armadillo_100k.json")
+    tested = load("work_model_2core_armadillo20k_100k_h200.json")
+    test, test_gpu = tested["prediction"], tested["against"]
     gpu = model["against"]
     counted, walks = model["launches"], model["walks"]
     moves = sum(entry["launches"] for name, entry in counted["kernels"].items() if name.startswith("move_ids"))
@@ -319,14 +333,22 @@ def scale_h100() -> list[str]:
         "",
         "What limits speed (`bench/work_model.py`, issue 48): the armadillo at 100,000 (Warp, seed 0,",
         f"{gpu['gpu_median_s']:.2f} s unprofiled) with every launch timed on the device, beside the work counted on",
-        f"the 2-core machine (the same launches, kernel by kernel: {'yes' if gpu['same_launches'] else 'no'}). A move "
+        f"the 2-core machine (the same launches, kernel by kernel: {'yes' if gpu['same_launches'] else 'no'}). A move",
         "launch lasts as long as its slowest thread's chain of tree nodes.",
         "",
         *table(["part", "H100", "counted on the CPU", "per unit"], split),
+        f"The model's test (H200, one run): the same constants measured there predict {test['seconds']:.2f} s for the",
+        f"20k-triangle armadillo at 100,000; it took {test_gpu['gpu_median_s']:.2f} s (moves {test['moves']:.2f} "
+        f"against {test_gpu['gpu_move_s']:.2f} s,",
+        f"other launches {test['other_launches']:.2f} against {test_gpu['gpu_other_s']:.2f} s, host "
+        f"{test['host']:.2f} against {test_gpu['gpu_median_s'] - test_gpu['gpu_device_s']:.2f} s): the host's "
+        "time is not a cost per synchronisation.",
         *sources("round_time_h100_issue20_step10c.json", "round_time_h100_cube_issue20_step7.json",
                  "scale_million_h100_warp_issue46.json", "scale_million_h100_numba_issue46.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48.json",
-                 "work_model_2core_armadillo_100k.json"),
+                 "work_model_2core_armadillo_100k.json", "profile_kernels_h200_armadillo_issue48.json",
+                 "profile_kernels_h200_armadillo20k_issue48.json", "work_model_2core_armadillo_100k_h200.json",
+                 "work_model_2core_armadillo20k_100k_h200.json"),
     ]
 
 

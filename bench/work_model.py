@@ -23,7 +23,9 @@ Two runs of the same packing (fast mode, seed 0), each counting what its backend
 ``--against`` sets the counts beside a GPU run of the same packing (``bench/profile_kernels.py``,
 every launch timed on the device): whether the launches match, kernel by kernel, and the constants
 the GPU's times imply (seconds per critical-path node of a move launch, per other launch, per
-synchronisation on the host), which predict the GPU's time from the next change's counts.
+synchronisation on the host). ``--constants`` predicts the GPU's time from the counts with an
+earlier run's constants (its ``against``), and with ``--against`` too sets it beside what the GPU
+took: the model's test.
 
 Counting changes nothing in the packing: the instrumented kernels write their counts into a
 tail appended to the shape's numbers, which no shape reads. The CPU runs take minutes at 100,000
@@ -217,6 +219,18 @@ def against(result: dict, profile: dict) -> dict:
                 host_seconds_per_sync=host / result["launches"]["syncs"])
 
 
+def predict(result: dict, constants: dict) -> dict:
+    """The GPU's seconds for ``result``'s counts, by the constants another run's ``against`` gave:
+    moves by their critical-path nodes, other launches by their number, the host by its
+    synchronisations."""
+    counted, walks = result["launches"], result["walks"]
+    moves = sum(entry["launches"] for name, entry in counted["kernels"].items() if name.startswith("move_ids"))
+    parts = dict(moves=walks["critical_path_nodes"] * constants["seconds_per_critical_node"],
+                 other_launches=(counted["launches"] - moves) * constants["seconds_per_other_launch"],
+                 host=counted["syncs"] * constants["host_seconds_per_sync"])
+    return dict(parts, seconds=sum(parts.values()))
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--mesh", help="a mesh file (else the unit cube)")
@@ -225,9 +239,12 @@ def main():
     parser.add_argument("--parts", nargs="+", default=["launches", "walks"], choices=["launches", "walks"])
     parser.add_argument("--most-points", type=int, default=2_000_000, help="room for a converge launch's counts")
     parser.add_argument("--against", type=Path, help="a GPU run's bench/profile_kernels.py JSON, same packing")
+    parser.add_argument("--constants", type=Path, help="an earlier work model JSON: its constants predict this run")
     parser.add_argument("--out", type=Path)
     args = parser.parse_args()
     shape = nd.TriangleMesh.load(args.mesh) if args.mesh else nd.Box(np.zeros(3), np.ones(3))
+    if args.constants:  # checked before the long runs
+        constants = json.loads(args.constants.read_text())["against"]
     result = dict(machine=machine_info(), shape=args.mesh or "unit cube", count=args.count, seed=args.seed,
                   command="python bench/work_model.py " + " ".join(sys.argv[1:]))
     if "launches" in args.parts:
@@ -252,6 +269,13 @@ def main():
               f"{found['gpu_other_s']:.2f} s of other launches ({1e3 * found['seconds_per_other_launch']:.3f} ms each) "
               f"+ {found['gpu_median_s'] - found['gpu_device_s']:.2f} s on the host "
               f"({1e3 * found['host_seconds_per_sync']:.2f} ms a synchronisation)")
+    if args.constants and "launches" in result and "walks" in result:
+        result["prediction"] = found = predict(result, constants)
+        found["constants_from"] = args.constants.name
+        measured = result.get("against", {}).get("gpu_median_s")
+        print(f"predicted by {args.constants.name}'s constants: {found['seconds']:.2f} s (moves "
+              f"{found['moves']:.2f} s, other launches {found['other_launches']:.2f} s, host {found['host']:.2f} s)"
+              + (f"; the GPU took {measured:.2f} s" if measured else ""))
     if args.out:
         write_json(args.out, result)
 

@@ -250,8 +250,8 @@ def test_benchmarks_page_is_what_the_script_writes(tmp_path):
                    capture_output=True)
     written, page = out.read_text(), (ROOT / "docs" / "benchmarks.md").read_text()
     assert written == page, "docs/benchmarks.md differs from what bench/make_benchmarks.py writes: run it"
-    # Issue 47 added two sections (the index at scale, sharing a machine): about 70 lines.
-    assert written.count("\n") <= 400, "docs/benchmarks.md is one page of today's figures (about 400 lines)"
+    # Issue 47 added two sections (the index at scale, sharing a machine), issue 48 the work model.
+    assert written.count("\n") <= 410, "docs/benchmarks.md is one page of today's figures (about 400 lines)"
 
 
 def _headings(page: Path) -> list[str]:
