@@ -1,4 +1,5 @@
-"""Shared helpers of the benchmark scripts: machine description and JSON output."""
+"""Shared helpers of the benchmark scripts: machine description, JSON output, and runs of a
+checkout's code in a fresh process."""
 
 from __future__ import annotations
 
@@ -6,6 +7,8 @@ import datetime as _dt
 import json
 import os
 import platform
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -45,6 +48,29 @@ def load_average() -> list | None:
         return [round(v, 2) for v in os.getloadavg()]
     except OSError:
         return None
+
+
+def run_with(checkout, argv: list[str], env: dict | None = None, timeout: float | None = None):
+    """``python ARGV`` in a fresh process whose ``ndpack`` is ``checkout``'s: it is first on the path
+    (before the caller's, which may hold dependencies) and the working folder (``-c`` puts that
+    first). ``env`` adds to (or, with None values, removes from) this process's environment.
+    Returns the finished process (text output)."""
+    environment = {**os.environ}
+    for name, value in (env or {}).items():
+        if value is None:
+            environment.pop(name, None)
+        else:
+            environment[name] = value
+    environment["PYTHONPATH"] = os.pathsep.join(filter(None, [str(checkout), os.environ.get("PYTHONPATH")]))
+    return subprocess.run([sys.executable, *argv], capture_output=True, text=True, env=environment, cwd=str(checkout),
+                          timeout=timeout)
+
+
+def last_json(done) -> dict:
+    """The last line a finished process (:func:`run_with`) printed, as JSON; its error where it failed."""
+    if done.returncode:
+        raise RuntimeError(done.stderr[-3000:])
+    return json.loads(done.stdout.strip().splitlines()[-1])
 
 
 def write_json(path: Path, data: dict) -> None:

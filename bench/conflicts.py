@@ -24,9 +24,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import json
-import os
 import statistics
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -95,11 +93,13 @@ def one(case: str, mode: str) -> dict:
 
 def packings(repo: str, cases, modes) -> list:
     """Each case's packing in each mode (the faithful one for the periodic cases only)."""
+    sys.path.insert(0, str(HERE))
+    from _common import run_with
+
     rows = []
     for case in cases:
         for mode in modes if case.startswith("periodic") else [mode for mode in modes if mode == "fast"]:
-            done = subprocess.run([sys.executable, __file__, "--one", case, mode], capture_output=True, text=True,
-                                  env={**os.environ, "PYTHONPATH": repo})
+            done = run_with(repo, [str(HERE / "conflicts.py"), "--one", case, mode])
             row = json.loads(done.stdout) if done.returncode == 0 else dict(
                 case=case, mode=mode, error=(done.stderr.strip().splitlines() or ["killed"])[-1])
             print(row, flush=True)

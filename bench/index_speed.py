@@ -22,14 +22,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import statistics
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
-from _common import load_average, machine_info, write_json
+from _common import last_json, load_average, machine_info, run_with, write_json
 from _load import busy
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -107,12 +106,7 @@ print(json.dumps(rows))
 
 def run(code: str, checkout: Path) -> dict:
     """Run ``code`` with ``checkout``'s ndpack; its last printed line, as JSON."""
-    path = os.pathsep.join([str(checkout)] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])
-    env = dict(os.environ, PYTHONPATH=path)
-    done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, cwd=checkout)
-    if done.returncode:
-        raise RuntimeError(f"{checkout}: {done.stderr[-2000:]}")
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return last_json(run_with(checkout, ["-c", code]))
 
 
 def worktree(revision: str, folder: Path) -> Path:
@@ -149,8 +143,9 @@ def packings(args, versions) -> dict:
 
 def queries(args, versions) -> dict:
     path = str(Path(tempfile.mkdtemp()) / "calls.pkl")
-    subprocess.run([sys.executable, "-c", RECORD.format(dim=args.queries, at=args.at, path=path)], check=True,
-                   env=dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])))
+    done = run_with(ROOT, ["-c", RECORD.format(dim=args.queries, at=args.at, path=path)])
+    if done.returncode:
+        raise RuntimeError(done.stderr[-3000:])
     timed = {version: run(QUERY.format(path=path), checkout) for version, checkout in versions.items()}
     rows = []
     for call, after in enumerate(timed["after"]):

@@ -83,6 +83,15 @@ def _timed_phase(recorder, name, function):
     return wrapper
 
 
+def launch_kind(name, args):
+    """A launch's kernel ``name``, with a move launch's kind: a polish, a move that polishes ahead,
+    or a move (``args`` of ``move_ids`` end with polish, spread, polish_steps, polish_low, finite
+    where it polishes ahead, and polish_from)."""
+    if name != "move_ids":
+        return name
+    return "move_ids[polish]" if args[-5] else "move_ids[move+ahead]" if args[-2] < 1e300 else "move_ids[move]"
+
+
 def _timed_launch(recorder, launch):
     @functools.wraps(launch)
     def wrapper(self, name, threads, *args):
@@ -90,10 +99,7 @@ def _timed_launch(recorder, launch):
         started = time.perf_counter()
         launch(self, name, threads, *args)
         self.synchronize()
-        if name == "move_ids":  # the polish apart from moves
-            # args end with polish, spread, polish_steps, polish_low (finite: polishes ahead), polish_from
-            name = "move_ids[polish]" if args[-5] else "move_ids[move+ahead]" if args[-2] < 1e300 else "move_ids[move]"
-        recorder.kernel(name, time.perf_counter() - started, threads)
+        recorder.kernel(launch_kind(name, args), time.perf_counter() - started, threads)
     return wrapper
 
 

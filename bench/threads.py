@@ -18,15 +18,11 @@ measures instead.
 from __future__ import annotations
 
 import argparse
-import json
-import os
 import statistics
-import subprocess
-import sys
 import time
 from pathlib import Path
 
-from _common import load_average, machine_info, write_json
+from _common import last_json, load_average, machine_info, run_with, write_json
 from _load import busy
 
 #: name -> (shape expression, count, mode); numpy is ``np`` and ndpack ``nd`` where they run.
@@ -71,17 +67,12 @@ def run_one(case: str, threads: str, version: str) -> dict:
     """One packing of ``case`` in a fresh process: ``before``, ``after``, or a fixed threshold
     (seconds of work on one thread, ``NDPACK_PARALLEL_FROM``)."""
     expression, count, mode = CASES[case]
-    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
-    env.pop("NDPACK_PARALLEL_FROM", None)  # NUMBA_NUM_THREADS, where set, is the default threads
+    # NUMBA_NUM_THREADS, where set, is the default threads.
+    env = {"NDPACK_PARALLEL_FROM": None if version == "after" else "0" if version == "before" else version}
     if threads == "1":
         env["NUMBA_NUM_THREADS"] = "1"
-    if version != "after":
-        env["NDPACK_PARALLEL_FROM"] = "0" if version == "before" else version
-    result = subprocess.run([sys.executable, "-c", CHILD, expression, str(count), mode], capture_output=True,
-                            text=True, env=env, timeout=1800)
-    if result.returncode != 0:
-        raise RuntimeError(result.stderr[-3000:])
-    row = json.loads(result.stdout.strip().splitlines()[-1])
+    row = last_json(run_with(Path(__file__).resolve().parents[1], ["-c", CHILD, expression, str(count), mode],
+                             env=env, timeout=1800))
     row["load_average"] = load_average()
     return row
 

@@ -48,6 +48,7 @@ from ndpack.backends.prototypes import SPREAD_MAX
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import machine_info, write_json
+from profile_kernels import launch_kind
 
 #: Slots at the end of the instrumented shape's numbers: the nodes and evaluations counters,
 #: then two per prototype of a converge launch.
@@ -65,9 +66,7 @@ class LaunchCounter:
         self._mark = (0, 0, 0)
 
     def launch(self, name, threads, args):
-        if name == "move_ids":  # args end with polish, spread, polish_steps, polish_low, polish_from
-            name = "move_ids[polish]" if args[-5] else "move_ids[move+ahead]" if args[-2] < 1e300 else "move_ids[move]"
-        entry = self.kernels[name]
+        entry = self.kernels[launch_kind(name, args)]
         entry[0] += 1
         entry[1] += threads
         entry[2] = max(entry[2], threads)

@@ -335,7 +335,8 @@ def touches(i, points, clearance, centers, radii):
 #: A level holds the spheres of radius a third to a sixth of its cells' side. Measured on the
 #: queries of 3-D to 5-D packings (60,000-95,000 spheres; bench/index_speed.py --queries, with
 #: this edited): 3 was as fast as 4 in 3-D and 1.2-1.9x faster in 4-D and 5-D, where a cell of
-#: side 4r holds up to 200 spheres of radius r/2 to r; 2, 2.5, 3.5 and 8 were slower.
+#: side 4r has room for about 200 spheres of radius r/2 (its volume over theirs); 2, 2.5, 3.5 and 8
+#: were slower.
 INDEX_FACTOR = 3.0
 
 

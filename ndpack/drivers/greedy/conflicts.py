@@ -216,9 +216,7 @@ def _greedy_by_pairs(tree, frame, centers, radii, margin, period=None):
     large, largest = few_largest(radii)
     pairs = [tree.query_pairs(widened(2 * largest + margin), output_type="ndarray")]
     if len(large):
-        partners = tree.query_ball_point(frame[large], widened(radii[large] + largest + margin), return_sorted=False)
-        lengths = np.fromiter(map(len, partners), dtype=np.int64, count=len(partners))
-        pairs.append(np.stack([np.repeat(large, lengths), np.concatenate(partners).astype(np.int64)], axis=1))
+        pairs.append(np.stack(_near(tree, frame[large], widened(radii[large] + largest + margin), large), axis=1))
         among = np.triu_indices(len(large), 1)
         pairs.append(np.stack([large[among[0]], large[among[1]]], axis=1))
     pairs = np.concatenate(pairs)
