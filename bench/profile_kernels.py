@@ -1,7 +1,7 @@
 """Where a fast-mode packing's time goes, by device kernel and by driver phase.
 
     python bench/profile_kernels.py --backends warp numba-cuda --count 100000 [--mesh armadillo.obj]
-        [--variants now no-ahead] [--repeats 2] [--host-profile]
+        [--variants now no-ahead] [--repeats 2] [--host-profile] [--stages]
 
 Every kernel launch of the device store is made synchronous and timed (so its time is the
 device's, launch included; copies queued before it are waited for first, and not counted).
@@ -13,10 +13,12 @@ slows the run down: the total is not the unprofiled time. Compiles first (a 3-sp
 ``no-ahead`` does not polish ahead (``rounds.POLISH_AHEAD``, the backend's ``launch_bound``);
 ``spread-1`` moves each prototype on one thread of a launch, however few it moves (the
 backend's ``move_spread``, see :func:`ndpack.backends.prototypes.lane_spread`); ``threads-2^k``
-spreads a move launch over at most 2^k threads (``prototypes.SPREAD_THREADS``).
+spreads a move launch over at most 2^k threads (``prototypes.SPREAD_THREADS``); ``split-R`` splits
+cells down to R times the frontier on a GPU (``rounds.SPLIT_RATIO_AHEAD``).
 Each variant is also timed unprofiled ``--repeats`` times (median). ``--host-profile`` prints
 the host's cProfile of one unprofiled ``now`` run (by own time, then ndpack's functions by
-inclusive time): where the host works and waits.
+inclusive time): where the host works and waits. ``--stages`` times the unprofiled runs' stages
+(setting up, the rounds, the final check), each ended by a device synchronisation.
 """
 
 from __future__ import annotations
@@ -40,6 +42,8 @@ from ndpack.backends import get_backend, prototypes
 VARIANTS = {"now": {}, "no-ahead": {"launch_bound": False}, "spread-1": {"move_spread": 1}}
 #: Variants that set ``prototypes.SPREAD_THREADS`` instead: a move launch's most threads.
 THREAD_VARIANTS = {f"threads-2^{bits}": 1 << bits for bits in (15, 16, 18, 19, 20)}
+#: Variants that set the GPU's split ratio (``rounds.SPLIT_RATIO_AHEAD``) instead.
+SPLIT_VARIANTS = {f"split-{ratio:g}": ratio for ratio in (2.0, 2.5, 3.0, 4.0)}
 
 #: Driver phases timed inclusively: (owner, attribute name).
 PHASES = [
@@ -81,6 +85,53 @@ def _timed_phase(recorder, name, function):
         finally:
             recorder.phase(name, time.perf_counter() - started)
     return wrapper
+
+
+#: The stages of a packing timed in the unprofiled runs (``--stages``), each ended by a device
+#: synchronisation, so that a stage's wall time includes the device work it queued: setting up
+#: (placing and converging the prototypes), the rounds, and the final check in float64.
+STAGES = [(protosphere.RunState, "__init__", "setup"), (protosphere, "_run_rounds", "rounds"),
+          (protosphere, "_ensure_valid", "verify")]
+
+
+def _device_sync():
+    """Wait for every GPU queue this process uses (Warp's, numba-cuda's), where there is one."""
+    try:
+        import warp as wp
+
+        if wp.is_cuda_available():
+            wp.synchronize()
+    except ImportError:
+        pass
+    try:
+        from numba import cuda
+
+        if cuda.is_available():
+            cuda.synchronize()
+    except ImportError:
+        pass
+
+
+def install_stages(seconds):
+    """Time :data:`STAGES` into ``seconds`` (a dict: stage -> [seconds, ...]); returns an undo function."""
+    saved = []
+    for owner, attribute, stage in STAGES:
+        original = getattr(owner, attribute)
+        saved.append((owner, attribute, original))
+
+        def timed(*args, _original=original, _stage=stage, **kwargs):
+            started = time.perf_counter()
+            try:
+                return _original(*args, **kwargs)
+            finally:
+                _device_sync()
+                seconds.setdefault(_stage, []).append(time.perf_counter() - started)
+        setattr(owner, attribute, functools.wraps(original)(timed))
+
+    def undo():
+        for owner, attribute, original in saved:
+            setattr(owner, attribute, original)
+    return undo
 
 
 def launch_kind(name, args):
@@ -144,9 +195,14 @@ def main():
     parser.add_argument("--backends", nargs="+", default=["warp"])
     parser.add_argument("--count", type=int, default=100_000)
     parser.add_argument("--mesh", default=None, help="a mesh file; default the unit cube")
-    parser.add_argument("--variants", nargs="+", default=["now"], choices=[*VARIANTS, *THREAD_VARIANTS])
+    parser.add_argument("--variants", nargs="+", default=["now"],
+                        choices=[*VARIANTS, *THREAD_VARIANTS, *SPLIT_VARIANTS])
     parser.add_argument("--repeats", type=int, default=0, help="unprofiled runs per variant (median)")
     parser.add_argument("--host-profile", action="store_true", help="cProfile one unprofiled run of `now`")
+    parser.add_argument("--stages", action="store_true",
+                        help="time the unprofiled runs' stages (setup, rounds, verify), each ended by a device sync")
+    parser.add_argument("--no-profiled", action="store_true",
+                        help="only the unprofiled runs (--repeats of them): no run with every launch timed")
     parser.add_argument("--out", default=None, help="write the tables as JSON here")
     args = parser.parse_args()
     shape = nd.TriangleMesh.load(args.mesh) if args.mesh else nd.Box(np.zeros(3), np.ones(3))
@@ -154,18 +210,28 @@ def main():
     for name in args.backends:
         backend = get_backend(name)
         nd.pack(shape, 3, backend=backend, mode="fast")
-        spread_threads = prototypes.SPREAD_THREADS
+        spread_threads, split_ahead = prototypes.SPREAD_THREADS, rounds.SPLIT_RATIO_AHEAD
         defaults = {key: getattr(backend, key) for variant in VARIANTS.values() for key in variant
                     if hasattr(backend, key)}
         for variant in args.variants:
             for key, value in defaults.items():
                 setattr(backend, key, VARIANTS.get(variant, {}).get(key, value))
             prototypes.SPREAD_THREADS = THREAD_VARIANTS.get(variant, spread_threads)
-            timed = []
+            rounds.SPLIT_RATIO_AHEAD = SPLIT_VARIANTS.get(variant, split_ahead)
+            timed, stages = [], {}
             for _ in range(args.repeats):
+                undo_stages = install_stages(stages) if args.stages else (lambda: None)
                 started = time.perf_counter()
-                nd.pack(shape, args.count, backend=backend, mode="fast")
+                try:
+                    last = nd.pack(shape, args.count, backend=backend, mode="fast")
+                finally:
+                    undo_stages()
                 timed.append(time.perf_counter() - started)
+                print(f"   {name} {variant}: {timed[-1]:.2f} s, {len(last.stats.time)} rounds, fill {last.fill:.5f}",
+                      flush=True)
+            if stages:
+                print(f"== {name} {variant}: stages, median of {args.repeats} (s): "
+                      + ", ".join(f"{stage} {statistics.median(values):.3f}" for stage, values in stages.items()))
             if args.host_profile and variant == "now":
                 profile = cProfile.Profile()
                 profile.enable()
@@ -174,6 +240,12 @@ def main():
                 print(f"== {name}: host profile of one unprofiled run (tottime)")
                 pstats.Stats(profile).sort_stats("tottime").print_stats(25)
                 pstats.Stats(profile).sort_stats("cumtime").print_stats("ndpack", 30)
+            key = name if args.variants == ["now"] else f"{name} {variant}"
+            if args.no_profiled:
+                results[key] = dict(spheres=len(last.radii), rounds=len(last.stats.time), fill=last.fill,
+                                    unprofiled=timed, median=statistics.median(timed),
+                                    stages={stage: statistics.median(values) for stage, values in stages.items()})
+                continue
             recorder = Recorder()
             undo = install(recorder)
             started = time.perf_counter()
@@ -182,11 +254,12 @@ def main():
             finally:
                 undo()
             wall = time.perf_counter() - started
-            key = name if args.variants == ["now"] else f"{name} {variant}"
             results[key] = _report(key, packing, wall, recorder, timed)
+            if stages:
+                results[key]["stages"] = {stage: statistics.median(values) for stage, values in stages.items()}
         for key, value in defaults.items():
             setattr(backend, key, value)
-        prototypes.SPREAD_THREADS = spread_threads
+        prototypes.SPREAD_THREADS, rounds.SPLIT_RATIO_AHEAD = spread_threads, split_ahead
     if args.out:
         with open(args.out, "w") as file:
             json.dump(results, file, indent=1)

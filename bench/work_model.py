@@ -3,6 +3,7 @@
     python bench/work_model.py --mesh ../shared/data/meshes/armadillo.obj --count 100000 \\
         --against bench/results/profile_kernels_h100_armadillo_issue48.json \\
         --out bench/results/work_model_2core_armadillo_100k.json [--parts launches walks]
+        [--constants EARLIER.json] [--split-ratio R]
 
 Two runs of the same packing (fast mode, seed 0), each counting what its backend cannot show:
 
@@ -11,7 +12,10 @@ Two runs of the same packing (fast mode, seed 0), each counting what its backend
   threads), so that its host logic is the GPU's: per round and in all, the launches of each kernel
   (``move_ids`` split into moves, moves with a polish ahead, and polishes, as
   ``bench/profile_kernels.py`` splits them), their threads, and the host-device synchronisations
-  (each ``fetch`` and ``synchronize``: a round trip that stalls the GPU's queue).
+  (each ``fetch`` and ``synchronize``: a round trip that stalls the GPU's queue); and the host's
+  own time in the rounds (their wall time less the launches', which the CPU device runs to the
+  end before returning: the Python and NumPy work a GPU run does between launches) and the final
+  check's time.
 - ``walks``: numba on one thread, with the converge kernel's text instrumented here (not in the
   package): per converge launch and per prototype, the mesh-tree nodes visited (every walk of the
   tree, ``nearest_element``'s above all) and the distance evaluations (``sd_feature`` calls). A
@@ -22,10 +26,13 @@ Two runs of the same packing (fast mode, seed 0), each counting what its backend
 
 ``--against`` sets the counts beside a GPU run of the same packing (``bench/profile_kernels.py``,
 every launch timed on the device): whether the launches match, kernel by kernel, and the constants
-the GPU's times imply (seconds per critical-path node of a move launch, per other launch, per
-synchronisation on the host). ``--constants`` predicts the GPU's time from the counts with an
-earlier run's constants (its ``against``), and with ``--against`` too sets it beside what the GPU
-took: the model's test.
+the GPU's times imply: seconds per critical-path node of a move launch, per other launch, and,
+from a run with ``--stages``, the GPU host's time in the rounds (the rounds' stage less the
+device's time) and its final check over this machine's, and the set-up's seconds. (The first
+model's host term, seconds per synchronisation, did not carry from one mesh to another: 47% off.)
+``--constants`` predicts the GPU's time from the counts with an earlier run's constants (its
+``against``), and with ``--against`` too sets it beside what the GPU took: the model's test.
+``--split-ratio`` counts a variant: the GPU's split ratio (``rounds.SPLIT_RATIO_AHEAD``).
 
 Counting changes nothing in the packing: the instrumented kernels write their counts into a
 tail appended to the shape's numbers, which no shape reads. The CPU runs take minutes at 100,000
@@ -48,7 +55,7 @@ from ndpack.backends.prototypes import SPREAD_MAX
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import machine_info, write_json
-from profile_kernels import launch_kind
+from profile_kernels import install_stages, launch_kind
 
 #: Slots at the end of the instrumented shape's numbers: the nodes and evaluations counters,
 #: then two per prototype of a converge launch.
@@ -80,17 +87,24 @@ class LaunchCounter:
 
 
 def count_launches(shape, count, seed):
-    """Pack on Warp's CPU device with the launches and synchronisations counted."""
+    """Pack on Warp's CPU device with the launches and synchronisations counted, and the host's
+    own time in the rounds (their wall time less the launches', which Warp's CPU device runs to the
+    end before returning): the Python and NumPy work a GPU run does between its launches."""
     from ndpack.backends import warp_backend
 
     counter = LaunchCounter()
     adapter = warp_backend._WarpDevice
     saved = adapter.launch, adapter.fetch, adapter.synchronize
+    launch_seconds = [0.0]
 
     def launch(self, name, threads, *args):
         if threads:
             counter.launch(name, threads, args)
-        return saved[0](self, name, threads, *args)
+        started = time.perf_counter()
+        try:
+            return saved[0](self, name, threads, *args)
+        finally:
+            launch_seconds[0] += time.perf_counter() - started
 
     def fetch(self, *pairs):
         counter.syncs += 1
@@ -101,14 +115,20 @@ def count_launches(shape, count, seed):
         return saved[2](self)
 
     adapter.launch, adapter.fetch, adapter.synchronize = launch, fetch, synchronize
+    stages = {}
     try:
         backend = nd.backends.get_backend("warp", device="cpu")
         backend.launch_bound, backend.move_spread = True, SPREAD_MAX  # the GPU's policies (see gpu_policy)
         nd.pack(shape, 200, mode="fast", backend=backend, progress=False)  # compile
         counter.__init__()
+        launch_seconds[0] = 0.0
+        undo = install_stages(stages)
         started = time.perf_counter()
-        packing = nd.pack(shape, count, mode="fast", backend=backend, seed=seed, progress=False,
-                          on_round=lambda _: counter.round_done())
+        try:
+            packing = nd.pack(shape, count, mode="fast", backend=backend, seed=seed, progress=False,
+                              on_round=lambda _: counter.round_done())
+        finally:
+            undo()
         seconds = time.perf_counter() - started
     finally:
         adapter.launch, adapter.fetch, adapter.synchronize = saved
@@ -116,7 +136,9 @@ def count_launches(shape, count, seed):
                for name, v in sorted(counter.kernels.items())}
     return dict(backend="warp, cpu", seconds=seconds, spheres=len(packing), fill=float(packing.fill),
                 rounds=len(counter.rounds), launches=sum(v["launches"] for v in kernels.values()),
-                syncs=counter.syncs, kernels=kernels, per_round=counter.rounds)
+                syncs=counter.syncs, host_rounds_s=stages["rounds"][0] - launch_seconds[0],
+                verify_s=stages["verify"][0],
+                split_ratio=packing.params.get("split_ratio"), kernels=kernels, per_round=counter.rounds)
 
 
 # --------------------------------------------------------------------------------------- walks
@@ -201,8 +223,10 @@ def against(result: dict, profile: dict) -> dict:
     """The counts beside a GPU run of the same packing (``bench/profile_kernels.py``'s JSON, one
     backend): launches per kernel on both, and what the GPU's times imply per unit of counted work,
     the constants a prediction uses: a move launch's seconds per node of its critical path, the
-    other launches' seconds each, and the host's seconds per synchronisation (its time beside the
-    device's, over the synchronisations)."""
+    other launches' seconds each, and, where the GPU run timed its stages (``--stages``), the
+    host's time in the rounds and the final check over this machine's (the same Python and NumPy
+    work on another CPU, with the synchronisations' latency), and the set-up's seconds. Without
+    stages, the host's time over the synchronisations (the first model's, which did not hold)."""
     gpu = next(iter(profile.values()))
     counted = result["launches"]["kernels"]
     rows = [dict(kernel=name, cpu_launches=counted.get(name, {}).get("launches", 0), gpu_launches=entry[0],
@@ -211,22 +235,33 @@ def against(result: dict, profile: dict) -> dict:
     others = sum(entry[1] for name, entry in gpu["kernels"].items() if not name.startswith("move_ids"))
     other_launches = sum(entry[0] for name, entry in gpu["kernels"].items() if not name.startswith("move_ids"))
     host = gpu["median"] - gpu["device"]
-    return dict(rows=rows, same_launches=all(row["cpu_launches"] == row["gpu_launches"] for row in rows),
-                gpu_median_s=gpu["median"], gpu_device_s=gpu["device"], gpu_move_s=moves, gpu_other_s=others,
-                seconds_per_critical_node=moves / result["walks"]["critical_path_nodes"],
-                seconds_per_other_launch=others / other_launches,
-                host_seconds_per_sync=host / result["launches"]["syncs"])
+    found = dict(rows=rows, same_launches=all(row["cpu_launches"] == row["gpu_launches"] for row in rows),
+                 gpu_median_s=gpu["median"], gpu_device_s=gpu["device"], gpu_move_s=moves, gpu_other_s=others,
+                 seconds_per_critical_node=moves / result["walks"]["critical_path_nodes"],
+                 seconds_per_other_launch=others / other_launches,
+                 host_seconds_per_sync=host / result["launches"]["syncs"])
+    stages = gpu.get("stages")
+    if stages and "host_rounds_s" in result["launches"]:
+        found.update(gpu_stages=stages, gpu_host_rounds_s=stages["rounds"] - gpu["device"],
+                     host_over_cpu=(stages["rounds"] - gpu["device"]) / result["launches"]["host_rounds_s"],
+                     verify_over_cpu=stages["verify"] / result["launches"]["verify_s"], setup_s=stages["setup"])
+    return found
 
 
 def predict(result: dict, constants: dict) -> dict:
     """The GPU's seconds for ``result``'s counts, by the constants another run's ``against`` gave:
-    moves by their critical-path nodes, other launches by their number, the host by its
-    synchronisations."""
+    moves by their critical-path nodes, other launches by their number, the host's rounds and
+    the final check by this machine's times of them (scaled), the set-up as measured; with an
+    older run's constants (no stages), the host by its synchronisations."""
     counted, walks = result["launches"], result["walks"]
     moves = sum(entry["launches"] for name, entry in counted["kernels"].items() if name.startswith("move_ids"))
     parts = dict(moves=walks["critical_path_nodes"] * constants["seconds_per_critical_node"],
-                 other_launches=(counted["launches"] - moves) * constants["seconds_per_other_launch"],
-                 host=counted["syncs"] * constants["host_seconds_per_sync"])
+                 other_launches=(counted["launches"] - moves) * constants["seconds_per_other_launch"])
+    if "host_over_cpu" in constants and "host_rounds_s" in counted:
+        parts.update(host=counted["host_rounds_s"] * constants["host_over_cpu"],
+                     verify=counted["verify_s"] * constants["verify_over_cpu"], setup=constants["setup_s"])
+    else:
+        parts["host"] = counted["syncs"] * constants["host_seconds_per_sync"]
     return dict(parts, seconds=sum(parts.values()))
 
 
@@ -239,8 +274,14 @@ def main():
     parser.add_argument("--most-points", type=int, default=2_000_000, help="room for a converge launch's counts")
     parser.add_argument("--against", type=Path, help="a GPU run's bench/profile_kernels.py JSON, same packing")
     parser.add_argument("--constants", type=Path, help="an earlier work model JSON: its constants predict this run")
+    parser.add_argument("--split-ratio", type=float,
+                        help="the GPU's split ratio (rounds.SPLIT_RATIO_AHEAD) for both runs: a variant")
     parser.add_argument("--out", type=Path)
     args = parser.parse_args()
+    if args.split_ratio is not None:
+        from ndpack.drivers.greedy import rounds
+
+        rounds.SPLIT_RATIO_AHEAD = args.split_ratio
     shape = nd.TriangleMesh.load(args.mesh) if args.mesh else nd.Box(np.zeros(3), np.ones(3))
     if args.constants:  # checked before the long runs
         constants = json.loads(args.constants.read_text())["against"]
@@ -249,7 +290,8 @@ def main():
     if "launches" in args.parts:
         result["launches"] = found = count_launches(shape, args.count, args.seed)
         print(f"device store (Warp CPU): {found['rounds']} rounds, {found['launches']:,} launches, "
-              f"{found['syncs']:,} synchronisations, {found['seconds']:.1f} s")
+              f"{found['syncs']:,} synchronisations, {found['seconds']:.1f} s; host in the rounds "
+              f"{found['host_rounds_s']:.2f} s, final check {found['verify_s']:.2f} s; fill {found['fill']:.5f}")
         for name, entry in found["kernels"].items():
             print(f"  {name:24s} {entry['launches']:6,} launches, {entry['threads'] / entry['launches']:10,.0f} "
                   f"threads a launch (most {entry['most_threads']:,})")
@@ -268,13 +310,17 @@ def main():
               f"{found['gpu_other_s']:.2f} s of other launches ({1e3 * found['seconds_per_other_launch']:.3f} ms each) "
               f"+ {found['gpu_median_s'] - found['gpu_device_s']:.2f} s on the host "
               f"({1e3 * found['host_seconds_per_sync']:.2f} ms a synchronisation)")
+        if "gpu_stages" in found:
+            print("  stages on the GPU: " + ", ".join(f"{k} {v:.2f} s" for k, v in found["gpu_stages"].items())
+                  + f"; the host's rounds {found['host_over_cpu']:.2f}x and the final check "
+                  f"{found['verify_over_cpu']:.2f}x this machine's")
     if args.constants and "launches" in result and "walks" in result:
         result["prediction"] = found = predict(result, constants)
         found["constants_from"] = args.constants.name
         measured = result.get("against", {}).get("gpu_median_s")
-        print(f"predicted by {args.constants.name}'s constants: {found['seconds']:.2f} s (moves "
-              f"{found['moves']:.2f} s, other launches {found['other_launches']:.2f} s, host {found['host']:.2f} s)"
-              + (f"; the GPU took {measured:.2f} s" if measured else ""))
+        print(f"predicted by {args.constants.name}'s constants: {found['seconds']:.2f} s ("
+              + ", ".join(f"{k} {v:.2f} s" for k, v in found.items() if k not in ("seconds", "constants_from"))
+              + ")" + (f"; the GPU took {measured:.2f} s" if measured else ""))
     if args.out:
         write_json(args.out, result)
 

@@ -1,8 +1,9 @@
 """Independent float64 check of a packing: every sphere inside the shape, no two overlapping.
 
 Containment uses the shape's own oracle, which is conservative (see :mod:`ndpack.oracle`), so a
-sphere that passes is truly inside. Overlaps are found with SciPy k-d trees, one per octave of
-radius, so that a few large spheres do not make every query reach across the whole packing.
+sphere that passes is truly inside. Overlaps are found per octave of radius, so that a few large
+spheres do not make every query reach across the whole packing: in sorted rows of a grid up to
+3-D without a period (:mod:`ndpack.geometry.overlaps`), else with SciPy k-d trees.
 
 For a triangle mesh, ``independent=True`` adds a check that shares nothing with the oracle's
 queries: points spread over each sphere are classified by the exact winding number of the mesh's
@@ -21,6 +22,7 @@ from scipy.spatial import cKDTree
 
 from .errors import DimensionError, NdpackError, ParameterError
 from .oracle import as_points
+from .geometry import overlaps
 from .geometry.period import period_of
 from .shapes.adapters import as_oracle
 
@@ -131,6 +133,11 @@ _FROM_FILE_NOTE = {
 def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0, period=None):
     """Pairs of spheres that overlap by more than ``tol``, and the worst overlap.
 
+    Without a period, in 1-D to 3-D, the pairs are found in sorted rows of a grid per octave of
+    radius (:mod:`ndpack.geometry.overlaps`, Numba); with a period, from 4-D up, or where that grid
+    does not apply (tiny spheres spread over more than 2**20 times their size, ``tol < 0``), by
+    SciPy k-d trees, one per octave. Both examine the same pairs and give the same answer.
+
     Parameters
     ----------
     centers : (n, d) float64
@@ -143,10 +150,24 @@ def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0, 
     Returns
     -------
     pairs : (k, 2) int64
-        ``i < j`` for each overlapping pair.
+        ``i < j`` for each overlapping pair, sorted.
     worst : float
-        Largest ``r_i + r_j - |c_i - c_j|`` among the near pairs examined; ``-inf`` if none.
+        Largest ``r_i + r_j - |c_i - c_j|`` among the near pairs examined; ``-inf`` if none. The
+        pairs examined include every pair within ``r_i + r_j + tol``, so where one is, ``worst``
+        does not depend on which pairs beyond it were examined.
     """
+    if period is None and np.ndim(centers) == 2 and np.shape(centers)[1] <= 3:
+        # Hand-written, as SciPy's k-d trees measured too slow for this hot path (the last check of
+        # every packing): on 100,000 spheres of the armadillo, 0.23 s against 0.041 s for the grid
+        # (2 cores, median of 5; ndpack.geometry.overlaps has the figures).
+        found = overlaps.overlapping_pairs(centers, radii, tol)
+        if found is not None:
+            return found
+    return _overlapping_pairs_kdtree(centers, radii, tol, period)
+
+
+def _overlapping_pairs_kdtree(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0, period=None):
+    """:func:`overlapping_pairs` by SciPy k-d trees, one per octave of radius: any dimension, any period."""
     if len(radii) < 2 and period is None:
         return np.zeros((0, 2), dtype=np.int64), -np.inf
     # In a periodic domain the trees wrap: one frame for all of them (ndpack.geometry.period).

@@ -43,3 +43,24 @@ def test_launches_are_counted_per_round(work_model):
     assert found["launches"] == sum(entry["launches"] for entry in found["kernels"].values())
     assert found["launches"] >= sum(entry["launches"] for entry in found["per_round"])
     assert any(name.startswith("move_ids") for name in found["kernels"]) and found["syncs"] > 0
+    assert found["host_rounds_s"] > 0 and found["verify_s"] > 0 and found["split_ratio"] is not None
+
+
+def test_the_host_is_predicted_from_its_own_time(work_model):
+    """With a GPU run's stages, the host's rounds and the final check are predicted from this
+    machine's times of them, scaled as the GPU run's were; without, by synchronisations."""
+    counted = dict(kernels={"move_ids[move+ahead]": dict(launches=10), "select_all": dict(launches=30)},
+                   launches=40, syncs=20, host_rounds_s=0.5, verify_s=0.2)
+    result = dict(launches=counted, walks=dict(critical_path_nodes=1e5))
+    kernels = {"move_ids[move+ahead]": [10, 0.8], "select_all": [30, 0.2]}
+    profile = {"warp": dict(median=2.0, device=1.0, kernels=kernels, stages=dict(setup=0.1, rounds=1.6, verify=0.3))}
+    constants = work_model.against(result, profile)
+    assert constants["same_launches"] and constants["host_over_cpu"] == pytest.approx(1.2)
+    assert constants["verify_over_cpu"] == pytest.approx(1.5) and constants["setup_s"] == 0.1
+    found = work_model.predict(result, constants)
+    assert found["moves"] == pytest.approx(0.8) and found["other_launches"] == pytest.approx(0.2)
+    assert found["host"] == pytest.approx(0.6) and found["verify"] == pytest.approx(0.3)
+    assert found["seconds"] == pytest.approx(0.8 + 0.2 + 0.6 + 0.3 + 0.1)
+    del profile["warp"]["stages"]
+    older = work_model.predict(result, work_model.against(result, profile))
+    assert "verify" not in older and older["host"] == pytest.approx(1.0)  # 20 syncs of (2.0 - 1.0) / 20 s

@@ -396,6 +396,35 @@ def test_fast_mode_polishing_ahead(name, monkeypatch):
         np.testing.assert_allclose(packing.radii, reference.radii, rtol=0, atol=1e-12)
 
 
+def test_fast_mode_takes_the_split_ratio_of_its_backend(monkeypatch):
+    """A launch-bound backend (a GPU) splits cells down to SPLIT_RATIO_AHEAD times the frontier,
+    others down to SPLIT_RATIO: recorded in the packing and used by every round. Set finer (as
+    bench/profile_kernels.py's split variants do), it makes more cells for the same spheres, and
+    the packing is valid with a fill no lower than the other's by 0.5%."""
+    from ndpack.drivers.greedy import rounds
+
+    seen = []
+    after_round = rounds.Fast.after_round
+
+    def recorded(self, state, *args):
+        seen.append((self.ratio, len(state.prototypes)))
+        after_round(self, state, *args)
+
+    monkeypatch.setattr(rounds.Fast, "after_round", recorded)
+    shape = nd.Box(np.zeros(3), np.ones(3)) - nd.Ball(np.full(3, 0.5), 0.3)
+    backend = backends.get_backend("numba")
+    # A coarse grid, so that cells split in both (a default grid is finer than either ratio here).
+    plain = nd.pack(shape, 1500, grid=6, mode="fast", backend=backend, on_invalid="raise")
+    plain_seen, seen[:] = list(seen), []
+    monkeypatch.setattr(backend, "launch_bound", True)
+    monkeypatch.setattr(rounds, "SPLIT_RATIO_AHEAD", 2.5)
+    ahead = nd.pack(shape, 1500, grid=6, mode="fast", backend=backend, on_invalid="raise")
+    assert plain.params["split_ratio"] == rounds.SPLIT_RATIO and {r for r, _ in plain_seen} == {rounds.SPLIT_RATIO}
+    assert ahead.params["split_ratio"] == 2.5 and {r for r, _ in seen} == {2.5}
+    assert seen[-1][1] > plain_seen[-1][1]  # finer cells: more prototypes
+    assert ahead.fill > 0.995 * plain.fill
+
+
 def test_fast_round_moves_its_prototypes_in_one_call(monkeypatch):
     """After a fast round, the cells split level after level without converging in between, and
     the touched prototypes, the new ones of every level and those polished ahead move in one call

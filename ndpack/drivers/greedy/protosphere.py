@@ -52,6 +52,7 @@ from .rounds import (
     Faithful,
     Fast,
     Sized,
+    split_ratio,
 )
 
 #: Grid cells over the bounds when ``grid`` is not given (32^3 in 3D, 181^2 in 2D).
@@ -785,11 +786,14 @@ def pack(
     backend = get_backend(backend, device=device, shape=packed)
     counts = grid_counts(packed.bounds, grid)
     polish_ahead = POLISH_AHEAD if backend.launch_bound and mode == "fast" else None
+    ratio = split_ratio(backend.launch_bound)
     params = dict(
         n=int(n), min_radius=float(min_radius), max_radius=None if max_radius == np.inf else max_radius,
         fill=fill, time_budget=time_budget, batch=int(batch), mode=mode, polish_window=POLISH_WINDOW,
         **_run_params(shape, backend, counts, iterations, restarts, seed, centers_only),
     )
+    if mode == "fast":
+        params["split_ratio"] = ratio
     if mode_why:
         params["mode_why"] = mode_why
     if obstacles is not None:
@@ -798,7 +802,7 @@ def pack(
         params.update(fast_eps_end=FAST_EPS_END, fast_polish_eps_end=FAST_POLISH_EPS_END, polish_ahead=polish_ahead)
 
     def strategy(state):
-        return Fast(state, polish_ahead=polish_ahead) if mode == "fast" else Faithful(int(batch))
+        return Fast(state, ratio=ratio, polish_ahead=polish_ahead) if mode == "fast" else Faithful(int(batch))
 
     return run(packed, backend, strategy, counts=counts, mode=mode, iterations=iterations, restarts=restarts,
                seed=seed, n=n, radius_range=(float(min_radius), max_radius), fill=fill, time_budget=time_budget,
@@ -981,14 +985,16 @@ def pack_sizes(
     backend = get_backend(backend, device=device, shape=packed)
     counts = grid_counts(packed.bounds, grid)
     polish_ahead = POLISH_AHEAD if backend.launch_bound else None
+    ratio = split_ratio(backend.launch_bound)
     params = dict(
         n=int(count), distribution=distribution.description, solid_fraction=solid_fraction, time_budget=time_budget,
         mode="sized", size_band=SIZE_BAND, fast_eps_end=FAST_EPS_END, fast_polish_eps_end=FAST_POLISH_EPS_END,
         polish_ahead=polish_ahead, **_run_params(shape, backend, counts, iterations, restarts, seed, centers_only),
     )
+    params["split_ratio"] = ratio
 
     def strategy(state):
-        return Sized(state, radii, polish_ahead=polish_ahead)
+        return Sized(state, radii, polish_ahead=polish_ahead, ratio=ratio)
 
     packing, sized = run(packed, backend, strategy, counts=counts, mode="fast", iterations=iterations,
                          restarts=restarts, seed=seed, n=len(radii), radius_range=(0.0, np.inf), fill=None,

@@ -40,6 +40,13 @@ FAST_WINDOW = 0.2
 #: many times the largest clearance and the cell could still hold a candidate, so that the gaps
 #: being filled are never much smaller than the cells that search for them.
 SPLIT_RATIO = 4.0
+#: Fast mode on a launch-bound backend (a GPU): the split ratio there, ``SPLIT_RATIO`` too, as
+#: measured. Finer cells find a size's gaps before the frontier comes down to them (with 4, many
+#: are found after the round of their size): 2.5 took the armadillo at 100,000 spheres in 34
+#: rounds instead of 50 and filled 0.5% more, but 2.72 s against 2.07 s on an H100 (Warp): 3.7x
+#: the prototypes moved, whose move launches became bound by throughput (27 against 14 ms each),
+#: and more candidates for the host's conflict check (docs/benchmarks.md, issue 48).
+SPLIT_RATIO_AHEAD = SPLIT_RATIO
 #: Fast mode: late finds (candidates at the last round's size, found in split cells or by
 #: restarts) join the next level's round when they are fewer than ``SMALL_ROUND`` and fewer than
 #: ``SMALL_ROUND_SHARE`` of the spheres so far, and always when fewer than ``SMALL_ROUND_FIRST``
@@ -380,8 +387,8 @@ class Sized(Fast):
     name = "sized"
     searches = False  # its choice gives radii up itself, and returns none only when none are left
 
-    def __init__(self, state, radii, polish_ahead=None, band: float = SIZE_BAND):
-        super().__init__(state, window=FAST_WINDOW, polish_ahead=polish_ahead)
+    def __init__(self, state, radii, polish_ahead=None, band: float = SIZE_BAND, ratio: float = SPLIT_RATIO):
+        super().__init__(state, window=FAST_WINDOW, ratio=ratio, polish_ahead=polish_ahead)
         self.ties = False  # capped at the largest radius left: its ties are the capped ones'
         self.pending = np.sort(np.asarray(radii, dtype=np.float64))[::-1]  # largest first
         self.band = band
@@ -413,6 +420,12 @@ class Sized(Fast):
         if len(returned):
             self.pending = np.sort(np.concatenate([self.pending, returned]))[::-1]
         super().after_round(state, centers, radii, room)
+
+
+def split_ratio(launch_bound: bool) -> float:
+    """The fast mode's split ratio on a backend: ``SPLIT_RATIO_AHEAD`` where launches are bound by
+    their latency (a GPU), else ``SPLIT_RATIO``."""
+    return SPLIT_RATIO_AHEAD if launch_bound else SPLIT_RATIO
 
 
 def _assign(wanted, fits):

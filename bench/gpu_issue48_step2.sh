@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# Issue 48, second step, on the GPU machine after the set-up runs (../shared/device/README.md).
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step2.sh compile   the first compile, cache cold
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step2.sh armadillo the armadillo at 100,000: Warp now
+#        (split ratio SPLIT_RATIO_AHEAD) against split-4 (the ratio before), stages timed, every launch
+#        timed in a second run; numba on the host's cores beside them
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step2.sh million   the cube and the armadillo at
+#        1,000,000 on Warp, the cube on numba on the host's cores
+set -uo pipefail
+source bench/gpu_header.sh
+[ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
+CARD=$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1 | grep -o 'H[0-9][0-9]*' | head -1 | tr H h)  # h100, h200
+case "${1:-}" in
+  compile)
+    # A cache of its own, empty: what a fresh machine's first packing of a mesh compiles and waits.
+    export NDPACK_CACHE=/tmp/ndpack-cold-cache WARP_CACHE_PATH=/tmp/ndpack-cold-cache/warp
+    rm -rf /tmp/ndpack-cold-cache
+    python3 - <<'PY' 2>&1 | grep -v "^Warp\|^Module" | tee "$OUT/compile_${CARD}_issue48.txt"
+import time
+import ndpack as nd
+shape = nd.TriangleMesh.load("/tmp/armadillo.obj")
+started = time.perf_counter()
+nd.pack(shape, 3, backend="warp", mode="fast", progress=False)
+first = time.perf_counter() - started
+started = time.perf_counter()
+nd.pack(shape, 3, backend="warp", mode="fast", progress=False)
+print(f"warp, cuda: first packing of a mesh, cache empty: {first:.1f} s; the next: {time.perf_counter() - started:.2f} s")
+PY
+    ;;
+  armadillo)
+    export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
+    timeout 400 python3 bench/profile_kernels.py --backends warp --mesh /tmp/armadillo.obj --count 100000 \
+      --repeats 3 --stages --variants now split-4 --out "$OUT/profile_kernels_${CARD}_armadillo_issue48_step2.json" \
+      2>&1 | grep -v "^Warp\|^Module" | tail -70
+    timeout 150 python3 bench/profile_kernels.py --backends numba --mesh /tmp/armadillo.obj --count 100000 \
+      --repeats 3 --stages --no-profiled --out "$OUT/profile_kernels_${CARD}host_numba_armadillo_issue48_step2.json" \
+      2>&1 | grep -v "^Warp\|^Module"
+    ;;
+  million)
+    export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
+    timeout 150 python3 bench/profile_kernels.py --backends warp --count 1000000 --repeats 1 --stages --no-profiled \
+      --out "$OUT/million_${CARD}_cube_issue48_step2.json" 2>&1 | grep -v "^Warp\|^Module"
+    timeout 150 python3 bench/profile_kernels.py --backends warp --mesh /tmp/armadillo.obj --count 1000000 --repeats 1 \
+      --stages --no-profiled --out "$OUT/million_${CARD}_armadillo_issue48_step2.json" 2>&1 | grep -v "^Warp\|^Module"
+    timeout 120 python3 bench/profile_kernels.py --backends numba --count 1000000 --repeats 1 --stages --no-profiled \
+      --out "$OUT/million_${CARD}host_numba_cube_issue48_step2.json" 2>&1 | grep -v "^Warp\|^Module"
+    ;;
+  *) echo "usage: bash bench/gpu_issue48_step2.sh compile|armadillo|million" >&2; exit 2 ;;
+esac
