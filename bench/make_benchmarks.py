@@ -94,6 +94,9 @@ SOURCES = {
         "--against bench/results/profile_kernels_h100_armadillo_issue48_step2.json "
         "--constants bench/results/work_model_2core_armadillo_100k_issue48_before.json"),
     "policy_fill_2core_10k.json": Source("2 cores", "3ffe337", "python bench/policy_fill.py --count 10000 --seeds 3"),
+    "compile_options_h100_issue48.json": Source(
+        "H100, NumPy 2.5", "3ffe337", "python3 bench/compile_options.py --mesh armadillo.obj --variants O2 default "
+        "--count 100000 --repeats 3"),
     "scale_million_h100_warp_issue46.json": Source(
         "H100, NumPy 2.5", "4210e2b", "bash bench/gpu_issue46.sh warp", "2026-11-27"),
     "scale_million_h100_numba_issue46.json": Source(
@@ -313,6 +316,7 @@ def scale_h100() -> list[str]:
     model = load("work_model_2core_armadillo_100k_issue48_step2.json")
     gpu, predicted, counted = model["against"], model["prediction"], model["launches"]
     fill = {(row["shape"], row["run"]): row["fill"] for row in load("policy_fill_2core_10k.json")["rows"]}
+    optimised = {row["variant"]: row for row in load("compile_options_h100_issue48.json")["rows"]}
 
     def parts(run):
         stages, device = run["stages"], run["device"]
@@ -334,7 +338,8 @@ def scale_h100() -> list[str]:
          "one run, 3ffe337"],
         ["unit cube", "1,000,000", seconds(cube_1m["median"]), "", seconds(cube_1m_cpu["median"]),
          f"{cube_1m['fill']:.4f}", "one run each, 3ffe337"],
-        ["unit cube", "10,000,000", seconds(warp_10m["seconds"]), "", "", f"{warp_10m['fill']:.4f}", "one run, e7f6fee"],
+        ["unit cube", "10,000,000", seconds(warp_10m["seconds"]), "", "", f"{warp_10m['fill']:.4f}",
+         "one run, e7f6fee"],
     ]
     head = ["shape", "spheres", "Warp, cuda:0", "numba-cuda", "numba, the host's 16 cores", "fill (Warp)", "runs, code"]
     cases = [("unit cube", "cube"), ("unit square", "square"), ("armadillo (20k triangles)", "armadillo")]
@@ -358,21 +363,23 @@ def scale_h100() -> list[str]:
         "",
         *table(["stage", "before (e08d8b4)", "now (3ffe337)", "predicted"], split),
         f"A move launch lasts as long as its slowest thread's chain: {1e6 * gpu['seconds_per_critical_node']:.2f} us a "
-        f"node of the slowest prototypes' walks ({model['walks']['critical_path_nodes']:,.0f} nodes); the host's round",
-        f"takes {gpu['host_over_cpu']:.1f}x its time on the 2-core machine ({counted['host_rounds_s']:.2f} s). The final "
-        "check now finds overlaps in a grid's sorted rows",
-        "(Numba) instead of k-d trees. Splitting cells finer on a GPU (ratio 2.5, not 4) filled 0.5% more in 34 rounds",
+        f"node ({model['walks']['critical_path_nodes']:,.0f} nodes);",
+        f"the host's round takes {gpu['host_over_cpu']:.1f}x its time on 2 cores ({counted['host_rounds_s']:.2f} s). "
+        "The final check finds overlaps in a grid's sorted rows (Numba), not k-d trees.",
+        "Splitting cells finer on a GPU (ratio 2.5, not 4) filled 0.5% more in 34 rounds",
         "instead of 50 but took 2.72 s against 2.07 s: its 3.7x prototypes made the move launches bound by throughput",
         "([console output](../bench/results/split_ratio_h100_issue48.txt)). A fresh machine's first packing of a mesh",
-        "on Warp took 131 s with the cache empty, where the notices said 15, 30 and 12 s",
-        "([console output](../bench/results/compile_h100_issue48.txt)).",
+        f"on Warp, caches empty, took {optimised['default']['first_packing_s']:.0f} s at Warp's default optimisation "
+        f"(the notices said 15, 30 and 12 s), {optimised['O2']['first_packing_s']:.1f} s at level 2, ndpack's now",
+        f"(then {optimised['default']['median_s']:.2f} and {optimised['O2']['median_s']:.2f} s for the 100,000).",
         *sources("profile_kernels_h100_armadillo_issue48_step2.json",
                  "profile_kernels_h100host_numba_armadillo_issue48_step2.json",
                  "million_h100_cube_issue48_step2.json", "million_h100_armadillo_issue48_step2.json",
                  "million_h100host_numba_cube_issue48_step2.json", "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
                  "work_model_2core_armadillo_100k_issue48_before.json",
-                 "work_model_2core_armadillo_100k_issue48_step2.json", "policy_fill_2core_10k.json"),
+                 "work_model_2core_armadillo_100k_issue48_step2.json", "policy_fill_2core_10k.json",
+                 "compile_options_h100_issue48.json"),
     ]
 
 
