@@ -5,7 +5,9 @@
 #        (split ratio SPLIT_RATIO_AHEAD) against split-4 (the ratio before), stages timed, every launch
 #        timed in a second run; numba on the host's cores beside them
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step2.sh million   the cube and the armadillo at
-#        1,000,000 on Warp, the cube on numba on the host's cores
+#        1,000,000 on Warp (3 and 2 runs), the cube on numba on the host's cores (one run)
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step2.sh first     a process's first packing of the
+#        armadillo at 100,000 against its next ones (bench/first_run.py)
 set -uo pipefail
 source bench/gpu_header.sh
 [ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
@@ -38,12 +40,17 @@ PY
     ;;
   million)
     export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
-    timeout 150 python3 bench/profile_kernels.py --backends warp --count 1000000 --repeats 1 --stages --no-profiled \
+    timeout 150 python3 bench/profile_kernels.py --backends warp --count 1000000 --repeats 3 --stages --no-profiled \
       --out "$OUT/million_${CARD}_cube_issue48_step2.json" 2>&1 | grep -v "^Warp\|^Module"
-    timeout 150 python3 bench/profile_kernels.py --backends warp --mesh /tmp/armadillo.obj --count 1000000 --repeats 1 \
+    timeout 150 python3 bench/profile_kernels.py --backends warp --mesh /tmp/armadillo.obj --count 1000000 --repeats 2 \
       --stages --no-profiled --out "$OUT/million_${CARD}_armadillo_issue48_step2.json" 2>&1 | grep -v "^Warp\|^Module"
     timeout 120 python3 bench/profile_kernels.py --backends numba --count 1000000 --repeats 1 --stages --no-profiled \
       --out "$OUT/million_${CARD}host_numba_cube_issue48_step2.json" 2>&1 | grep -v "^Warp\|^Module"
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step2.sh compile|armadillo|million" >&2; exit 2 ;;
+  first)
+    export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
+    timeout 150 python3 bench/first_run.py --mesh /tmp/armadillo.obj --count 100000 --backend warp --repeats 3 \
+      --out "$OUT/first_run_${CARD}_armadillo_issue48.json" 2>&1 | grep -v "^Warp\|^Module"
+    ;;
+  *) echo "usage: bash bench/gpu_issue48_step2.sh compile|armadillo|million|first" >&2; exit 2 ;;
 esac

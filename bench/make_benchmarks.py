@@ -78,11 +78,11 @@ SOURCES = {
     "profile_kernels_h100host_numba_armadillo_issue48_step2.json": Source(
         "H100, NumPy 2.5", "3ffe337", "bash bench/gpu_issue48_step2.sh armadillo", "2026-11-27"),
     "million_h100_cube_issue48_step2.json": Source(
-        "H100, NumPy 2.5", "3ffe337", "bash bench/gpu_issue48_step2.sh million", "2026-11-27"),
+        "H100, NumPy 2.5", "b55d5e0", "bash bench/gpu_issue48_step2.sh million", "2026-11-27"),
     "million_h100_armadillo_issue48_step2.json": Source(
-        "H100, NumPy 2.5", "3ffe337", "bash bench/gpu_issue48_step2.sh million", "2026-11-27"),
+        "H100, NumPy 2.5", "b55d5e0", "bash bench/gpu_issue48_step2.sh million", "2026-11-27"),
     "million_h100host_numba_cube_issue48_step2.json": Source(
-        "H100, NumPy 2.5", "3ffe337", "bash bench/gpu_issue48_step2.sh million", "2026-11-27"),
+        "H100, NumPy 2.5", "b55d5e0", "bash bench/gpu_issue48_step2.sh million", "2026-11-27"),
     "profile_kernels_h100_armadillo_issue48_before.json": Source(
         "H100, NumPy 2.5", "e08d8b4", "python3 bench/profile_kernels.py --backends warp numba --mesh armadillo.obj "
         "--count 100000 --repeats 3 --stages --host-profile", "2026-11-27"),
@@ -335,9 +335,9 @@ def scale_h100() -> list[str]:
         ["unit cube", "100,000", *[seconds(median_of(cube, backend=b)) for b in ("warp", "numba-cuda", "numba")],
          f"{median_of(cube, 'fill', backend='warp'):.4f}", "medians of 2, 4ea141e"],
         ["armadillo (100k triangles)", "1,000,000", seconds(arm_1m["median"]), "", "", f"{arm_1m['fill']:.4f}",
-         "one run, 3ffe337"],
+         "median of 2, b55d5e0"],
         ["unit cube", "1,000,000", seconds(cube_1m["median"]), "", seconds(cube_1m_cpu["median"]),
-         f"{cube_1m['fill']:.4f}", "one run each, 3ffe337"],
+         f"{cube_1m['fill']:.4f}", "median of 3 (numba: 1), b55d5e0"],
         ["unit cube", "10,000,000", seconds(warp_10m["seconds"]), "", "", f"{warp_10m['fill']:.4f}",
          "one run, e7f6fee"],
     ]
@@ -356,10 +356,9 @@ def scale_h100() -> list[str]:
         f"{cube_1m_cpu['median'] / cube_1m['median']:.1f}x on the cube at a million (goals: 5x, 1 s and 5 s). A GPU's "
         f"fast mode fills at 10,000 spheres this fraction of the faithful mode's: {policy}.",
         "",
-        "Where the armadillo's time goes before and after issue 48's second step (stages ended by a device sync,",
-        "launches timed in a second run), and the work model's prediction of the second from the first's constants",
-        f"and the work counted on 2 cores (`bench/work_model.py`; same launches, kernel by kernel: "
-        f"{'yes' if gpu['same_launches'] else 'no'}):",
+        "The armadillo's time before and after issue 48's second step (stages end with a device sync), and the work",
+        "model's prediction of the second from the first's constants and the work counted on 2 cores "
+        f"(`bench/work_model.py`; same launches: {'yes' if gpu['same_launches'] else 'no'}):",
         "",
         *table(["stage", "before (e08d8b4)", "now (3ffe337)", "predicted"], split),
         f"A move launch lasts as long as its slowest thread's chain: {1e6 * gpu['seconds_per_critical_node']:.2f} us a "

@@ -94,26 +94,22 @@ STAGES = [(protosphere.RunState, "__init__", "setup"), (protosphere, "_run_round
           (protosphere, "_ensure_valid", "verify")]
 
 
-def _device_sync():
-    """Wait for every GPU queue this process uses (Warp's, numba-cuda's), where there is one."""
-    try:
-        import warp as wp
-
-        if wp.is_cuda_available():
-            wp.synchronize()
-    except ImportError:
-        pass
-    try:
+def device_sync(backend):
+    """A function that waits for ``backend``'s device queue (nothing on a CPU). Only that queue:
+    asking numba-cuda whether a GPU is there starts its driver, a second in a run's first stage."""
+    device = getattr(backend, "device", None)
+    if getattr(backend, "name", "") == "warp" and getattr(device, "is_cuda", False):
+        return lambda: backend.wp.synchronize_device(device)
+    if getattr(backend, "name", "") == "numba-cuda":
         from numba import cuda
 
-        if cuda.is_available():
-            cuda.synchronize()
-    except ImportError:
-        pass
+        return cuda.synchronize
+    return lambda: None
 
 
-def install_stages(seconds):
-    """Time :data:`STAGES` into ``seconds`` (a dict: stage -> [seconds, ...]); returns an undo function."""
+def install_stages(seconds, sync=lambda: None):
+    """Time :data:`STAGES` into ``seconds`` (a dict: stage -> [seconds, ...]), each ended by
+    ``sync()`` (see :func:`device_sync`); returns an undo function."""
     saved = []
     for owner, attribute, stage in STAGES:
         original = getattr(owner, attribute)
@@ -124,7 +120,7 @@ def install_stages(seconds):
             try:
                 return _original(*args, **kwargs)
             finally:
-                _device_sync()
+                sync()
                 seconds.setdefault(_stage, []).append(time.perf_counter() - started)
         setattr(owner, attribute, functools.wraps(original)(timed))
 
@@ -220,7 +216,7 @@ def main():
             rounds.SPLIT_RATIO_AHEAD = SPLIT_VARIANTS.get(variant, split_ahead)
             timed, stages = [], {}
             for _ in range(args.repeats):
-                undo_stages = install_stages(stages) if args.stages else (lambda: None)
+                undo_stages = install_stages(stages, device_sync(backend)) if args.stages else (lambda: None)
                 started = time.perf_counter()
                 try:
                     last = nd.pack(shape, args.count, backend=backend, mode="fast")

@@ -276,7 +276,7 @@ def announce(kind: str, what: str, typical: float | None = None) -> None:
     fallback = TYPICAL_SECONDS[kind] if typical is None else typical
     seconds = _measured().get(_estimate_key(kind, what), fallback)
     kept = f"kept in {cache_root()} for next time" if kept_for_next_time() else "not kept: the cache folder was refused"
-    notice(f"compiling {kind} kernels for {what} (first use on this machine, about {seconds:.0f} s; {kept})")
+    notice(f"compiling {kind} kernels for {what} (first use on this machine, about {max(seconds, 1):.0f} s; {kept})")
 
 
 def _measured() -> dict:
