@@ -83,6 +83,10 @@ SOURCES = {
         "H100, NumPy 2.5", "b55d5e0", "bash bench/gpu_issue48_step2.sh million", "2026-11-27"),
     "million_h100host_numba_cube_issue48_step2.json": Source(
         "H100, NumPy 2.5", "b55d5e0", "bash bench/gpu_issue48_step2.sh million", "2026-11-27"),
+    "million_h100_square_issue48_step2.json": Source(
+        "H100, NumPy 2.5", "b55d5e0", "bash bench/gpu_issue48_step2.sh square", "2026-11-27"),
+    "million_h100host_numba_square_issue48_step2.json": Source(
+        "H100, NumPy 2.5", "b55d5e0", "bash bench/gpu_issue48_step2.sh square", "2026-11-27"),
     "profile_kernels_h100_armadillo_issue48_before.json": Source(
         "H100, NumPy 2.5", "e08d8b4", "python3 bench/profile_kernels.py --backends warp numba --mesh armadillo.obj "
         "--count 100000 --repeats 3 --stages --host-profile", "2026-11-27"),
@@ -311,10 +315,12 @@ def scale_h100() -> list[str]:
     arm_1m = load("million_h100_armadillo_issue48_step2.json")["warp"]
     cube_1m, cube_1m_cpu = load("million_h100_cube_issue48_step2.json")["warp"], \
         load("million_h100host_numba_cube_issue48_step2.json")["numba"]
+    square_1m, square_1m_cpu = load("million_h100_square_issue48_step2.json")["warp"], \
+        load("million_h100host_numba_square_issue48_step2.json")["numba"]
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
     before = load("profile_kernels_h100_armadillo_issue48_before.json")["warp"]
     model = load("work_model_2core_armadillo_100k_issue48_step2.json")
-    gpu, predicted, counted = model["against"], model["prediction"], model["launches"]
+    gpu, predicted = model["against"], model["prediction"]
     fill = {(row["shape"], row["run"]): row["fill"] for row in load("policy_fill_2core_10k.json")["rows"]}
     optimised = {row["variant"]: row for row in load("compile_options_h100_issue48.json")["rows"]}
 
@@ -338,6 +344,8 @@ def scale_h100() -> list[str]:
          "median of 2, b55d5e0"],
         ["unit cube", "1,000,000", seconds(cube_1m["median"]), "", seconds(cube_1m_cpu["median"]),
          f"{cube_1m['fill']:.4f}", "median of 3 (numba: 1), b55d5e0"],
+        ["unit square", "1,000,000", seconds(square_1m["median"]), "", seconds(square_1m_cpu["median"]),
+         f"{square_1m['fill']:.4f}", "median of 2 (numba: 1), b55d5e0"],
         ["unit cube", "10,000,000", seconds(warp_10m["seconds"]), "", "", f"{warp_10m['fill']:.4f}",
          "one run, e7f6fee"],
     ]
@@ -348,33 +356,33 @@ def scale_h100() -> list[str]:
     return [
         "## Packing at scale: H100",
         "",
-        "Fast mode, seed 0: seconds of the whole `nd.pack` call, the final float64 check included, the compile",
-        "apart (a warm-up packing first). numba-cuda was not run on 3ffe337 (the image's NumPy 2.5 breaks it).",
+        "Fast mode, seed 0: seconds of the whole `nd.pack` call, the final float64 check included, the compile apart",
+        "(a warm-up packing first). numba-cuda was not run on 3ffe337 or later (the image's NumPy 2.5 breaks it).",
         "",
         *table(head, rows),
-        f"Warp is {arm_cpu['median'] / arm['median']:.1f}x the host's 16 cores on the armadillo at 100,000 and "
-        f"{cube_1m_cpu['median'] / cube_1m['median']:.1f}x on the cube at a million (goals: 5x, 1 s and 5 s). A GPU's "
-        f"fast mode fills at 10,000 spheres this fraction of the faithful mode's: {policy}.",
+        f"Warp is {arm_cpu['median'] / arm['median']:.1f}x the host's 16 cores on the armadillo at 100,000, "
+        f"{cube_1m_cpu['median'] / cube_1m['median']:.1f}x on the cube and",
+        f"{square_1m_cpu['median'] / square_1m['median']:.1f}x on the square at a million (goals: 5x; 1 s, 8 s, 5 s). "
+        f"A GPU's fast mode fills at 10,000 spheres this fraction of the faithful mode's: {policy}.",
         "",
         "The armadillo's time before and after issue 48's second step (stages end with a device sync), and the work",
         "model's prediction of the second from the first's constants and the work counted on 2 cores "
         f"(`bench/work_model.py`; same launches: {'yes' if gpu['same_launches'] else 'no'}):",
         "",
         *table(["stage", "before (e08d8b4)", "now (3ffe337)", "predicted"], split),
-        f"A move launch lasts as long as its slowest thread's chain: {1e6 * gpu['seconds_per_critical_node']:.2f} us a "
-        f"node ({model['walks']['critical_path_nodes']:,.0f} nodes);",
-        f"the host's round takes {gpu['host_over_cpu']:.1f}x its time on 2 cores ({counted['host_rounds_s']:.2f} s). "
-        "The final check finds overlaps in a grid's sorted rows (Numba), not k-d trees.",
-        "Splitting cells finer on a GPU (ratio 2.5, not 4) filled 0.5% more in 34 rounds",
-        "instead of 50 but took 2.72 s against 2.07 s: its 3.7x prototypes made the move launches bound by throughput",
-        "([console output](../bench/results/split_ratio_h100_issue48.txt)). A fresh machine's first packing of a mesh",
-        f"on Warp, caches empty, took {optimised['default']['first_packing_s']:.0f} s at Warp's default optimisation "
-        f"(the notices said 15, 30 and 12 s), {optimised['O2']['first_packing_s']:.1f} s at level 2, ndpack's now",
-        f"(then {optimised['default']['median_s']:.2f} and {optimised['O2']['median_s']:.2f} s for the 100,000).",
+        f"A move launch lasts as long as its slowest thread's chain ({1e6 * gpu['seconds_per_critical_node']:.2f} us a "
+        f"node); the host's round takes {gpu['host_over_cpu']:.1f}x its 2-core time. The final check finds overlaps in",
+        "a grid's sorted rows (Numba), not k-d trees. Cells split finer on a GPU (ratio 2.5, not 4) filled 0.5% more",
+        "in 34 rounds, not 50, but took 2.72 s, not 2.07 s: 3.7x the prototypes made the moves bound by throughput",
+        "([output](../bench/results/split_ratio_h100_issue48.txt)). A fresh machine's first packing of a mesh on Warp,",
+        f"caches empty, took {optimised['default']['first_packing_s']:.0f} s at Warp's default optimisation "
+        f"(the notices said 15, 30, 12 s), {optimised['O2']['first_packing_s']:.1f} s at level 2, ndpack's now "
+        f"(packing {optimised['default']['median_s']:.2f} and {optimised['O2']['median_s']:.2f} s).",
         *sources("profile_kernels_h100_armadillo_issue48_step2.json",
                  "profile_kernels_h100host_numba_armadillo_issue48_step2.json",
                  "million_h100_cube_issue48_step2.json", "million_h100_armadillo_issue48_step2.json",
-                 "million_h100host_numba_cube_issue48_step2.json", "round_time_h100_cube_issue20_step7.json",
+                 "million_h100host_numba_cube_issue48_step2.json", "million_h100_square_issue48_step2.json",
+                 "million_h100host_numba_square_issue48_step2.json", "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
                  "work_model_2core_armadillo_100k_issue48_before.json",
                  "work_model_2core_armadillo_100k_issue48_step2.json", "policy_fill_2core_10k.json",

@@ -190,7 +190,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--backends", nargs="+", default=["warp"])
     parser.add_argument("--count", type=int, default=100_000)
-    parser.add_argument("--mesh", default=None, help="a mesh file; default the unit cube")
+    parser.add_argument("--mesh", default=None, help="a mesh file; default the unit cube (or --square)")
+    parser.add_argument("--square", action="store_true", help="the unit square instead of the cube")
     parser.add_argument("--variants", nargs="+", default=["now"],
                         choices=[*VARIANTS, *THREAD_VARIANTS, *SPLIT_VARIANTS])
     parser.add_argument("--repeats", type=int, default=0, help="unprofiled runs per variant (median)")
@@ -201,7 +202,8 @@ def main():
                         help="only the unprofiled runs (--repeats of them): no run with every launch timed")
     parser.add_argument("--out", default=None, help="write the tables as JSON here")
     args = parser.parse_args()
-    shape = nd.TriangleMesh.load(args.mesh) if args.mesh else nd.Box(np.zeros(3), np.ones(3))
+    dim = 2 if args.square else 3
+    shape = nd.TriangleMesh.load(args.mesh) if args.mesh else nd.Box(np.zeros(dim), np.ones(dim))
     results = {}
     for name in args.backends:
         backend = get_backend(name)
