@@ -73,20 +73,16 @@ SOURCES = {
     "round_time_h100_cube_issue20_step7.json": Source(
         "H100", "4ea141e", "python3 bench/round_time.py --mesh cube --count 100000 "
         "--backends warp numba-cuda numba --versions now=. --repeats 2", "2026-11-25"),
-    "profile_kernels_h100_armadillo_issue48_step2.json": Source(
-        "H100, NumPy 2.5", "3ffe337", "bash bench/gpu_issue48_step2.sh armadillo", "2026-11-27"),
-    "profile_kernels_h100host_numba_armadillo_issue48_step2.json": Source(
-        "H100, NumPy 2.5", "3ffe337", "bash bench/gpu_issue48_step2.sh armadillo", "2026-11-27"),
-    "million_h100_cube_issue48_step2.json": Source(
-        "H100, NumPy 2.5", "b55d5e0", "bash bench/gpu_issue48_step2.sh million", "2026-11-27"),
-    "million_h100_armadillo_issue48_step2.json": Source(
-        "H100, NumPy 2.5", "b55d5e0", "bash bench/gpu_issue48_step2.sh million", "2026-11-27"),
-    "million_h100host_numba_cube_issue48_step2.json": Source(
-        "H100, NumPy 2.5", "b55d5e0", "bash bench/gpu_issue48_step2.sh million", "2026-11-27"),
-    "million_h100_square_issue48_step2.json": Source(
-        "H100, NumPy 2.5", "b55d5e0", "bash bench/gpu_issue48_step2.sh square", "2026-11-27"),
-    "million_h100host_numba_square_issue48_step2.json": Source(
-        "H100, NumPy 2.5", "b55d5e0", "bash bench/gpu_issue48_step2.sh square", "2026-11-27"),
+    # Issue 48's second step: bench/gpu_issue48_step2.sh MODE on one day, by the code of each file.
+    **{name: Source("H100, NumPy 2.5", commit, f"bash bench/gpu_issue48_step2.sh {mode}", "2026-11-27")
+       for name, commit, mode in [
+           ("profile_kernels_h100_armadillo_issue48_step2.json", "3ffe337", "armadillo"),
+           ("profile_kernels_h100host_numba_armadillo_issue48_step2.json", "3ffe337", "armadillo"),
+           ("million_h100_cube_issue48_step2.json", "b55d5e0", "million"),
+           ("million_h100_armadillo_issue48_step2.json", "b55d5e0", "million"),
+           ("million_h100host_numba_cube_issue48_step2.json", "b55d5e0", "million"),
+           ("million_h100_square_issue48_step2.json", "b55d5e0", "square"),
+           ("million_h100host_numba_square_issue48_step2.json", "b55d5e0", "square")]},
     "profile_kernels_h100_armadillo_issue48_before.json": Source(
         "H100, NumPy 2.5", "e08d8b4", "python3 bench/profile_kernels.py --backends warp numba --mesh armadillo.obj "
         "--count 100000 --repeats 3 --stages --host-profile", "2026-11-27"),
@@ -322,6 +318,7 @@ def scale_h100() -> list[str]:
     model = load("work_model_2core_armadillo_100k_issue48_step2.json")
     gpu, predicted = model["against"], model["prediction"]
     fill = {(row["shape"], row["run"]): row["fill"] for row in load("policy_fill_2core_10k.json")["rows"]}
+    # Measured before ndpack set a level: "default" is Warp's own (3), "O2" ndpack's now.
     optimised = {row["variant"]: row for row in load("compile_options_h100_issue48.json")["rows"]}
 
     def parts(run):

@@ -45,9 +45,9 @@ COMPILES: dict[str, int] = {}
 #: Generated modules made in this process, by the same kinds: each new program text is one.
 MODULES: dict[str, int] = {}
 #: First-use compile time, in seconds, when this machine has not measured that compile yet: Numba
-#: (2 cores), numba-cuda, Warp on a CPU (2 cores: 7 s for the 3-D meshes' kernels) and on a GPU
+#: (2 cores), numba-cuda, Warp on a CPU (2 cores: 4 s for the 3-D meshes' kernels) and on a GPU
 #: (an H100: 3 s for them at ``WARP_OPTIMIZATION``, with the driver's compile of the PTX).
-TYPICAL_SECONDS = {"numba": 15, "numba-cuda": 40, "warp": 10, "warp on a GPU": 5}
+TYPICAL_SECONDS = {"numba": 15, "numba-cuda": 40, "warp": 6, "warp on a GPU": 5}
 #: Warp's CUDA optimisation level for ndpack's modules. At Warp's default (3) a fresh H100's first
 #: packing of a mesh compiled for 90 s (most of it the driver compiling Warp's PTX) and packed the
 #: armadillo's 100,000 spheres in 2.07 s; at 2, 3 s and 2.00 s (medians of 3, the driver's cache
