@@ -14,7 +14,10 @@ slows the run down: the total is not the unprofiled time. Compiles first (a 3-sp
 ``spread-1`` moves each prototype on one thread of a launch, however few it moves (the
 backend's ``move_spread``, see :func:`ndpack.backends.prototypes.lane_spread`); ``threads-2^k``
 spreads a move launch over at most 2^k threads (``prototypes.SPREAD_THREADS``); ``split-R`` splits
-cells down to R times the frontier on a GPU (``rounds.SPLIT_RATIO_AHEAD``).
+cells down to R times the frontier on a GPU (``rounds.SPLIT_RATIO_AHEAD``); ``lanes-N`` walks a
+mesh's tree cooperatively in move launches of at most N prototypes (``lanes-off``: never; the
+backend's ``cooperative_most``, see :mod:`ndpack.backends.warp_lanes`). Each variant's spheres are set
+beside the first variant's: their count and the largest change of a radius, sorted.
 Each variant is also timed unprofiled ``--repeats`` times (median). ``--host-profile`` prints
 the host's cProfile of one unprofiled ``now`` run (by own time, then ndpack's functions by
 inclusive time): where the host works and waits. ``--stages`` times the unprofiled runs' stages
@@ -39,7 +42,9 @@ from ndpack.drivers.greedy import protosphere, rounds
 from ndpack.backends import get_backend, prototypes
 
 #: The backend attributes each variant sets.
-VARIANTS = {"now": {}, "no-ahead": {"launch_bound": False}, "spread-1": {"move_spread": 1}}
+VARIANTS = {"now": {}, "no-ahead": {"launch_bound": False}, "spread-1": {"move_spread": 1},
+            **{f"lanes-{most}": {"cooperative_most": most} for most in (1024, 8192, 16384)},
+            "lanes-off": {"cooperative_most": 0}}
 #: Variants that set ``prototypes.SPREAD_THREADS`` instead: a move launch's most threads.
 THREAD_VARIANTS = {f"threads-2^{bits}": 1 << bits for bits in (15, 16, 18, 19, 20)}
 #: Variants that set the GPU's split ratio (``rounds.SPLIT_RATIO_AHEAD``) instead.
@@ -141,10 +146,10 @@ def launch_kind(name, args):
 
 def _timed_launch(recorder, launch):
     @functools.wraps(launch)
-    def wrapper(self, name, threads, *args):
+    def wrapper(self, name, threads, *args, lanes=1):
         self.synchronize()  # what was queued before (copies) is not this kernel's
         started = time.perf_counter()
-        launch(self, name, threads, *args)
+        launch(self, name, threads, *args, lanes=lanes)
         self.synchronize()
         recorder.kernel(launch_kind(name, args), time.perf_counter() - started, threads)
     return wrapper
@@ -211,6 +216,7 @@ def main():
         spread_threads, split_ahead = prototypes.SPREAD_THREADS, rounds.SPLIT_RATIO_AHEAD
         defaults = {key: getattr(backend, key) for variant in VARIANTS.values() for key in variant
                     if hasattr(backend, key)}
+        first_radii = None
         for variant in args.variants:
             for key, value in defaults.items():
                 setattr(backend, key, VARIANTS.get(variant, {}).get(key, value))
@@ -239,8 +245,15 @@ def main():
                 pstats.Stats(profile).sort_stats("tottime").print_stats(25)
                 pstats.Stats(profile).sort_stats("cumtime").print_stats("ndpack", 30)
             key = name if args.variants == ["now"] else f"{name} {variant}"
+            same = {}
+            if timed:  # the last unprofiled run's spheres against the first variant's
+                radii = np.sort(last.radii)
+                first_radii = radii if first_radii is None else first_radii
+                same = dict(spheres_first=len(first_radii), most_radius_change=float(
+                    np.abs(radii - first_radii).max()) if len(radii) == len(first_radii) else None)
+                print(f"   {name} {variant} against {args.variants[0]}: {same}", flush=True)
             if args.no_profiled:
-                results[key] = dict(spheres=len(last.radii), rounds=len(last.stats.time), fill=last.fill,
+                results[key] = dict(spheres=len(last.radii), rounds=len(last.stats.time), fill=last.fill, **same,
                                     unprofiled=timed, median=statistics.median(timed),
                                     stages={stage: statistics.median(values) for stage, values in stages.items()})
                 continue
@@ -252,7 +265,7 @@ def main():
             finally:
                 undo()
             wall = time.perf_counter() - started
-            results[key] = _report(key, packing, wall, recorder, timed)
+            results[key] = dict(_report(key, packing, wall, recorder, timed), **same)
             if stages:
                 results[key]["stages"] = {stage: statistics.median(values) for stage, values in stages.items()}
         for key, value in defaults.items():

@@ -97,12 +97,12 @@ def count_launches(shape, count, seed):
     saved = adapter.launch, adapter.fetch, adapter.synchronize
     launch_seconds = [0.0]
 
-    def launch(self, name, threads, *args):
+    def launch(self, name, threads, *args, lanes=1):
         if threads:
             counter.launch(name, threads, args)
         started = time.perf_counter()
         try:
-            return saved[0](self, name, threads, *args)
+            return saved[0](self, name, threads, *args, lanes=lanes)
         finally:
             launch_seconds[0] += time.perf_counter() - started
 

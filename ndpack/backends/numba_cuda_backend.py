@@ -441,7 +441,8 @@ class _CudaDevice:
     def synchronize(self):
         self.stream.synchronize()
 
-    def launch(self, name, threads, *args):
+    def launch(self, name, threads, *args, lanes=1):
+        """``lanes``: threads per item; numba-cuda has no cooperative kernels, so they idle."""
         self.backend._launch(self.namespace[name], threads, *args, stream=self.stream)
 
     def spheres(self, centers, radii):

@@ -690,7 +690,7 @@ class DevicePrototypes(Prototypes):
         device.launch("move_ids", spread * count, d_ids, d_first, first_rows, tries, np.uint64(stream), self.d_points,
                       self.d_clearance, self.d_polished, self.d_lower, self.d_upper, self.d_wall, device.params,
                       d_centers, d_radii, table, self._schedule(steps), device.h, int(polish), spread,
-                      self._schedule(polish_steps), float(polish_low), moved)
+                      self._schedule(polish_steps), float(polish_low), moved, lanes=spread)
 
     def _schedule(self, steps):
         """A cooling schedule (T,) on the device; the driver has two, each copied once."""

@@ -28,6 +28,7 @@ from ..kernels.tape import interpreter
 from .base import Backend, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
 from .prototypes import SPREAD_MAX, DevicePrototypes, no_wall
+from .warp_lanes import COOPERATIVE_MOST, LANES, functions_only, has_walk, lanes_text
 
 KERNELS = Path(__file__).with_name("warp_kernels.py").read_text()
 #: Central-difference step as a fraction of the shape's scale, per precision.
@@ -67,10 +68,13 @@ class WarpBackend(Backend):
         self.launch_bound = self.device.is_cuda
         # Threads per prototype in a move launch, at most (prototypes.lane_spread); idle ones cost a CPU.
         self.move_spread = SPREAD_MAX if self.launch_bound else 1
+        # A move launch of at most this many prototypes walks cooperatively (0: never; see warp_lanes).
+        self.cooperative_most = COOPERATIVE_MOST if self.launch_bound else 0
         self.precision = precision
         self.margin = MARGIN[precision]
         self.float = np.float64 if precision == "float64" else np.float32
         self._modules = {}  # id(program) -> (program, module)
+        self._lanes = {}  # id(program) -> (program, its cooperative module or None)
         self._params = weakref.WeakKeyDictionary()  # shape -> its numbers on the device
         self._spheres = {}
 
@@ -102,6 +106,20 @@ class WarpBackend(Backend):
         if id(program) not in self._modules:
             self._modules[id(program)] = (program, warp_module(program, self.precision, KERNELS, self.device))
         return self._modules[id(program)][1]
+
+    def _lanes_module(self, shape):
+        """The cooperative move of ``shape``'s program (:mod:`~ndpack.backends.warp_lanes`), in a
+        module of its own compiled for blocks of ``LANES``; None where the program walks no tree."""
+        program = compiled_program(shape).program
+        if id(program) not in self._lanes:
+            module = None
+            source = program.source("warp", self.precision)
+            if has_walk(source):
+                kernels = functions_only(KERNELS) + "\n\n" + lanes_text(source + "\n\n" + KERNELS)
+                module = warp_module(program, self.precision, kernels, self.device, block_dim=LANES,
+                                     what=" (cooperative moves)")
+            self._lanes[id(program)] = (program, module)
+        return self._lanes[id(program)][1]
 
     def _geometry(self, dim):
         """The shape-free kernels (near_spheres, touched) for dimension ``dim``: those of the
@@ -229,6 +247,7 @@ class _WarpDevice:
     def __init__(self, backend, shape):
         self.backend, self.wp, self.where = backend, backend.wp, backend.device
         self.module, self.params, self.h = backend._module(shape)
+        self.shape = shape
         self.dtypes = {"float": self.module.F, "point": self.module.VecD, "index": self.wp.int32}
         self._staging = {}  # (slot, dtype) -> pinned host array that fetch copies into
 
@@ -279,9 +298,19 @@ class _WarpDevice:
     def synchronize(self):
         self.wp.synchronize_device(self.where)
 
-    def launch(self, name, threads, *args):
-        if threads:
-            self.wp.launch(getattr(self.module, name), dim=threads, inputs=list(args), device=self.where)
+    def launch(self, name, threads, *args, lanes=1):
+        """``threads`` threads of kernel ``name``, ``lanes`` of them per item. A launch of more than
+        one lane per item and at most the backend's ``cooperative_most`` items runs the cooperative
+        kernel ``name_lanes`` instead where the shape has one: a block of ``LANES`` per item."""
+        if not threads:
+            return
+        items = threads // lanes
+        if lanes > 1 and items <= self.backend.cooperative_most:
+            cooperative = getattr(self.backend._lanes_module(self.shape), name + "_lanes", None)
+            if cooperative is not None:
+                self.wp.launch_tiled(cooperative, dim=[items], inputs=list(args), block_dim=LANES, device=self.where)
+                return
+        self.wp.launch(getattr(self.module, name), dim=threads, inputs=list(args), device=self.where)
 
     def spheres(self, centers, radii):
         return self.backend._device_spheres(self.module, centers, radii)

@@ -600,42 +600,39 @@ def restart_point(key: wp.uint64, t: int, lower: VecD, upper: VecD):
 
 
 @wp.func
-def polish_one(i: int, b: int, x: VecD, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
+def polish_one(i: int, b: int, lane: int, x: VecD, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
                polished: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
                wall: wp.array(dtype=F), prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
                nbr: wp.array2d(dtype=wp.int32), steps: wp.array(dtype=F), h: F):
     """Polish prototype ``i`` (row ``b`` of the table) from ``x``, its point: move it with ``steps``
-    and keep the result only if its clearance grew; mark it polished."""
+    and keep the result only if its clearance grew; mark it polished. Lane 0 writes."""
     best, best_clearance = converge_from(x, lower[i], upper[i], wall[i], prm, centers, radii, nbr, b, steps, h)
-    if best_clearance > clearance[i]:
-        points[i] = best
-        clearance[i] = best_clearance
-    polished[i] = 1
+    if lane == 0:
+        if best_clearance > clearance[i]:
+            points[i] = best
+            clearance[i] = best_clearance
+        polished[i] = 1
 
 
-@wp.kernel
-def move_ids(ids: wp.array(dtype=wp.int32), first: wp.array(dtype=VecD), first_rows: int, tries: int,
-             stream: wp.uint64, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
+@wp.func
+def move_one(b: int, lane: int, ids: wp.array(dtype=wp.int32), first: wp.array(dtype=VecD), first_rows: int,
+             tries: int, stream: wp.uint64, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
              polished: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
              wall: wp.array(dtype=F), prm: wp.array(dtype=F), centers: wp.array(dtype=VecD),
              radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32), steps: wp.array(dtype=F), h: F, polish: int,
-             spread: int, polish_steps: wp.array(dtype=F), polish_low: F, polish_from: int):
+             polish_steps: wp.array(dtype=F), polish_low: F, polish_from: int):
     """Move prototype ``ids[b]`` in place: from the best of its point, ``first[b]`` (clipped to its
     cell, where ``b < first_rows``) and ``tries`` random points of its cell drawn from ``stream``,
     converge; keep the result (``polish`` 0), or keep it only if better and mark it polished (1).
     Then, where it was not a polish and the clearance reaches ``polish_low``, polish it with
     ``polish_steps``; rows from ``polish_from`` on are only polished (the host store's
-    ``move(..., ahead=PolishAhead(...))``).
-    Thread ``b * spread`` moves it; the ``spread - 1`` threads after it idle (see
-    :func:`ndpack.backends.prototypes.lane_spread`)."""
-    t = wp.tid()
-    if t % spread != 0:
-        return
-    b = t // spread
+    ``move(..., ahead=PolishAhead(...))``). Lane 0 writes: the lanes of a cooperative launch
+    (ndpack.backends.warp_lanes) all compute the same move."""
     i = ids[b]
     x = points[i]
     if b >= polish_from:
-        polish_one(i, b, x, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr, polish_steps, h)
+        polish_one(i, b, lane, x, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
+                   polish_steps, h)
         return
     lead = int(0)
     if b < first_rows:
@@ -658,10 +655,27 @@ def move_ids(ids: wp.array(dtype=wp.int32), first: wp.array(dtype=VecD), first_r
                 top = c
                 x = y
     best, best_clearance = converge_from(x, lower[i], upper[i], wall[i], prm, centers, radii, nbr, b, steps, h)
-    if polish == 0 or best_clearance > clearance[i]:
-        points[i] = best
-        clearance[i] = best_clearance
-    polished[i] = polish
+    if lane == 0:
+        if polish == 0 or best_clearance > clearance[i]:
+            points[i] = best
+            clearance[i] = best_clearance
+        polished[i] = polish
     if polish == 0 and best_clearance >= polish_low:
-        polish_one(i, b, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr, polish_steps,
-                   h)
+        polish_one(i, b, lane, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
+                   polish_steps, h)
+
+
+@wp.kernel
+def move_ids(ids: wp.array(dtype=wp.int32), first: wp.array(dtype=VecD), first_rows: int, tries: int,
+             stream: wp.uint64, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
+             polished: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
+             wall: wp.array(dtype=F), prm: wp.array(dtype=F), centers: wp.array(dtype=VecD),
+             radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32), steps: wp.array(dtype=F), h: F, polish: int,
+             spread: int, polish_steps: wp.array(dtype=F), polish_low: F, polish_from: int):
+    """:func:`move_one` of prototype ``ids[b]`` by thread ``b * spread``; the ``spread - 1`` threads
+    after it idle (see :func:`ndpack.backends.prototypes.lane_spread`)."""
+    t = wp.tid()
+    if t % spread != 0:
+        return
+    move_one(t // spread, 0, ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper, wall,
+             prm, centers, radii, nbr, steps, h, polish, polish_steps, polish_low, polish_from)
