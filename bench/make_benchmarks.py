@@ -83,6 +83,12 @@ SOURCES = {
            ("million_h100host_numba_cube_issue48_step2.json", "b55d5e0", "million"),
            ("million_h100_square_issue48_step2.json", "b55d5e0", "square"),
            ("million_h100host_numba_square_issue48_step2.json", "b55d5e0", "square")]},
+    # Issue 48's third step (cooperative moves): bench/gpu_issue48_step3.sh MODE.
+    **{name: Source("H200, NumPy 2.5", "5d70ad2", f"bash bench/gpu_issue48_step3.sh {mode}", "2026-11-27")
+       for name, mode in [("profile_kernels_h200_armadillo_issue48_step3.json", "lanes"),
+                          ("profile_kernels_h200host_numba_armadillo_issue48_step3.json", "lanes"),
+                          ("million_h200_armadillo_issue48_step3.json", "million")]},
+    "cooperative_walk_2core_armadillo.json": Source("2 cores", "5d70ad2", "python bench/cooperative_walk.py"),
     "profile_kernels_h100_armadillo_issue48_before.json": Source(
         "H100, NumPy 2.5", "e08d8b4", "python3 bench/profile_kernels.py --backends warp numba --mesh armadillo.obj "
         "--count 100000 --repeats 3 --stages --host-profile", "2026-11-27"),
@@ -306,9 +312,14 @@ def intro() -> list[str]:
 
 def scale_h100() -> list[str]:
     arm = load("profile_kernels_h100_armadillo_issue48_step2.json")["warp now"]
-    arm_cpu = load("profile_kernels_h100host_numba_armadillo_issue48_step2.json")["numba"]
     cube = load("round_time_h100_cube_issue20_step7.json")["results"]
-    arm_1m = load("million_h100_armadillo_issue48_step2.json")["warp"]
+    lanes = load("profile_kernels_h200_armadillo_issue48_step3.json")
+    arm3, arm3_off = lanes["warp now"], lanes["warp lanes-off"]
+    arm3_cpu = load("profile_kernels_h200host_numba_armadillo_issue48_step3.json")["numba"]
+    arm3_1m = load("million_h200_armadillo_issue48_step3.json")
+    walk = load("cooperative_walk_2core_armadillo.json")["limits"]["last step's element"]
+    compiled = (RESULTS / "compile_h200_issue48_step3.txt").read_text()
+    first_h200 = float(re.search(r"cache empty: ([0-9.]+) s", compiled)[1])
     cube_1m, cube_1m_cpu = load("million_h100_cube_issue48_step2.json")["warp"], \
         load("million_h100host_numba_cube_issue48_step2.json")["numba"]
     square_1m, square_1m_cpu = load("million_h100_square_issue48_step2.json")["warp"], \
@@ -333,12 +344,12 @@ def scale_h100() -> list[str]:
     split = [[name, seconds(old), seconds(new), seconds(model_)]
              for name, old, new, model_ in zip(names, parts(before), parts(arm), guess)]
     rows = [
-        ["armadillo (100k triangles)", "100,000", seconds(arm["median"]), "", seconds(arm_cpu["median"]),
-         f"{arm['fill']:.4f}", "medians of 3, 3ffe337"],
+        ["armadillo (100k triangles)", "100,000", seconds(arm3["median"]), "", seconds(arm3_cpu["median"]),
+         f"{arm3['fill']:.4f}", "**H200**, medians of 3, 5d70ad2"],
         ["unit cube", "100,000", *[seconds(median_of(cube, backend=b)) for b in ("warp", "numba-cuda", "numba")],
          f"{median_of(cube, 'fill', backend='warp'):.4f}", "medians of 2, 4ea141e"],
-        ["armadillo (100k triangles)", "1,000,000", seconds(arm_1m["median"]), "", "", f"{arm_1m['fill']:.4f}",
-         "median of 2, b55d5e0"],
+        ["armadillo (100k triangles)", "1,000,000", seconds(arm3_1m["warp now"]["median"]), "", "",
+         f"{arm3_1m['warp now']['fill']:.4f}", "**H200**, median of 2, 5d70ad2"],
         ["unit cube", "1,000,000", seconds(cube_1m["median"]), "", seconds(cube_1m_cpu["median"]),
          f"{cube_1m['fill']:.4f}", "median of 3 (numba: 1), b55d5e0"],
         ["unit square", "1,000,000", seconds(square_1m["median"]), "", seconds(square_1m_cpu["median"]),
@@ -357,7 +368,7 @@ def scale_h100() -> list[str]:
         "(a warm-up packing first). numba-cuda was not run on 3ffe337 or later (the image's NumPy 2.5 breaks it).",
         "",
         *table(head, rows),
-        f"Warp is {arm_cpu['median'] / arm['median']:.1f}x the host's 16 cores on the armadillo at 100,000, "
+        f"Warp is {arm3_cpu['median'] / arm3['median']:.1f}x the host's 16 cores on the armadillo at 100,000 (H200), "
         f"{cube_1m_cpu['median'] / cube_1m['median']:.1f}x on the cube and",
         f"{square_1m_cpu['median'] / square_1m['median']:.1f}x on the square at a million (goals: 5x; 1 s, 8 s, 5 s). "
         f"A GPU's fast mode fills at 10,000 spheres this fraction of the faithful mode's: {policy}.",
@@ -368,13 +379,19 @@ def scale_h100() -> list[str]:
         "",
         *table(["stage", "before (e08d8b4)", "now (3ffe337)", "predicted"], split),
         f"A move launch lasts as long as its slowest thread's chain ({1e6 * gpu['seconds_per_critical_node']:.2f} us a "
-        f"node); the host's round takes {gpu['host_over_cpu']:.1f}x its 2-core time. The final check finds overlaps in",
-        "a grid's sorted rows (Numba), not k-d trees. Cells split finer on a GPU (ratio 2.5, not 4) filled 0.5% more",
-        "in 34 rounds, not 50, but took 2.72 s, not 2.07 s: 3.7x the prototypes made the moves bound by throughput",
-        "([output](../bench/results/split_ratio_h100_issue48.txt)). A fresh machine's first packing of a mesh on Warp,",
-        f"caches empty, took {optimised['default']['first_packing_s']:.0f} s at Warp's default optimisation "
+        f"node); the host's round takes {gpu['host_over_cpu']:.1f}x its 2-core time. The final check finds overlaps in "
+        "a grid's sorted rows (Numba), not k-d trees. Cells split finer (ratio 2.5, not 4) filled 0.5% more in 34 "
+        "rounds, but took 2.72 s, not 2.07 s ([output](../bench/results/split_ratio_h100_issue48.txt)).",
+        f"**Cooperative moves** (5d70ad2, H200): a block of 32 threads walks one prototype's mesh tree (worst query "
+        f"{walk['serial_nodes_most']:,.0f} nodes, {walk['32: rounds_most']:.0f} rounds), in move launches of at most "
+        f"4,096 prototypes. Without, the armadillo took {seconds(arm3_off['median'])} at 100,000 (device "
+        f"{seconds(arm3_off['device'])}, with {seconds(arm3['device'])}) and "
+        f"{seconds(arm3_1m['warp lanes-off']['median'])} at a million. A fresh machine's first packing of a mesh on "
+        f"Warp, caches empty, took {optimised['default']['first_packing_s']:.0f} s at Warp's default optimisation "
         f"(the notices said 15, 30, 12 s), {optimised['O2']['first_packing_s']:.1f} s at level 2, ndpack's now "
-        f"(packing {optimised['default']['median_s']:.2f} and {optimised['O2']['median_s']:.2f} s).",
+        f"(H100; packing {optimised['default']['median_s']:.2f} and {optimised['O2']['median_s']:.2f} s); with the "
+        f"cooperative module to compile too, {first_h200:.1f} s on the H200 "
+        "([output](../bench/results/compile_h200_issue48_step3.txt)).",
         *sources("profile_kernels_h100_armadillo_issue48_step2.json",
                  "profile_kernels_h100host_numba_armadillo_issue48_step2.json",
                  "million_h100_cube_issue48_step2.json", "million_h100_armadillo_issue48_step2.json",
@@ -383,7 +400,9 @@ def scale_h100() -> list[str]:
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
                  "work_model_2core_armadillo_100k_issue48_before.json",
                  "work_model_2core_armadillo_100k_issue48_step2.json", "policy_fill_2core_10k.json",
-                 "compile_options_h100_issue48.json"),
+                 "compile_options_h100_issue48.json", "profile_kernels_h200_armadillo_issue48_step3.json",
+                 "profile_kernels_h200host_numba_armadillo_issue48_step3.json",
+                 "million_h200_armadillo_issue48_step3.json", "cooperative_walk_2core_armadillo.json"),
     ]
 
 
