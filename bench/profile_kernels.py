@@ -15,9 +15,11 @@ slows the run down: the total is not the unprofiled time. Compiles first (a 3-sp
 backend's ``move_spread``, see :func:`ndpack.backends.prototypes.lane_spread`); ``threads-2^k``
 spreads a move launch over at most 2^k threads (``prototypes.SPREAD_THREADS``); ``split-R`` splits
 cells down to R times the frontier on a GPU (``rounds.SPLIT_RATIO_AHEAD``); ``lanes-N`` walks a
-mesh's tree cooperatively in move launches of at most N prototypes (``lanes-off``: never; the
-backend's ``cooperative_most``, see :mod:`ndpack.backends.warp_lanes`). Each variant's spheres are set
-beside the first variant's: their count and the largest change of a radius, sorted.
+mesh's tree cooperatively in move launches of at most N prototypes (``lanes-off``: never, in moves
+or the set-up's converge; ``converge-off``: not in the set-up's converge; the backend's
+``cooperative_most`` and ``cooperative_converge_most``, see :mod:`ndpack.backends.warp_lanes`).
+Each variant's spheres are set beside the first variant's: their count and the largest change of
+a radius, sorted.
 Each variant is also timed unprofiled ``--repeats`` times (median). ``--host-profile`` prints
 the host's cProfile of one unprofiled ``now`` run (by own time, then ndpack's functions by
 inclusive time): where the host works and waits. ``--stages`` times the unprofiled runs' stages
@@ -44,7 +46,8 @@ from ndpack.backends import get_backend, prototypes
 #: The backend attributes each variant sets.
 VARIANTS = {"now": {}, "no-ahead": {"launch_bound": False}, "spread-1": {"move_spread": 1},
             **{f"lanes-{most}": {"cooperative_most": most} for most in (1024, 8192, 16384)},
-            "lanes-off": {"cooperative_most": 0}}
+            "lanes-off": {"cooperative_most": 0, "cooperative_converge_most": 0},
+            "converge-off": {"cooperative_converge_most": 0}}
 #: Variants that set ``prototypes.SPREAD_THREADS`` instead: a move launch's most threads.
 THREAD_VARIANTS = {f"threads-2^{bits}": 1 << bits for bits in (15, 16, 18, 19, 20)}
 #: Variants that set the GPU's split ratio (``rounds.SPLIT_RATIO_AHEAD``) instead.

@@ -23,6 +23,9 @@ Two runs of the same packing (fast mode, seed 0), each counting what its backend
   largest prototype's node count (numba makes a move with a polish ahead two launches, the GPU
   one: their paths are summed, an upper bound); the table gives their sum over the run against
   the mean's, and the threads a launch has (a GPU keeps about 270,000 resident on an H100).
+  Beside each query, the rounds of the cooperative walk a GPU makes instead in a launch of few
+  prototypes (:mod:`ndpack.backends.warp_lanes`): such a launch's critical path is its largest
+  prototype's rounds.
 
 ``--against`` sets the counts beside a GPU run of the same packing (``bench/profile_kernels.py``,
 every launch timed on the device): whether the launches match, kernel by kernel, and the constants
@@ -52,14 +55,67 @@ import numpy as np
 
 import ndpack as nd
 from ndpack.backends.prototypes import SPREAD_MAX
+from ndpack.backends.warp_lanes import CONVERGE_MOST, COOPERATIVE_MOST, LANES
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import machine_info, write_json
 from profile_kernels import install_stages, launch_kind
 
-#: Slots at the end of the instrumented shape's numbers: the nodes and evaluations counters,
-#: then two per prototype of a converge launch.
-COUNTERS = 2
+#: Slots at the end of the instrumented shape's numbers: the nodes, evaluations and cooperative
+#: rounds counters, then three per prototype of a converge launch.
+COUNTERS = 3
+
+#: The rounds of the cooperative walk (ndpack.backends.warp_lanes) of a nearest-element query, in
+#: Numba: the same pops, tests and pushes, one node a lane a round; counted beside the serial walk,
+#: which gives the answer.
+LANES_ROUNDS = """
+def lanes_rounds(q, prm, o, limit):
+    nodes = int(prm[o + 7])
+    elements = int(prm[o + 8])
+    stride = int(prm[o + 10])
+    size = 2 * D + 2
+    pending = np.empty(4096, np.int64)
+    children = np.empty((LANES, 2), np.int64)
+    pending[0] = 0
+    top = 1
+    best = limit
+    rounds = 0
+    while top > 0:
+        rounds += 1
+        popped = min(LANES, top)
+        shared = best
+        for j in range(popped):
+            node = pending[top - 1 - j]
+            children[j, 0] = -1
+            children[j, 1] = -1
+            b = nodes + size * node
+            if box_squared_distance(q, prm, b) < shared:
+                count = int(prm[b + 2 * D + 1])
+                if count > 0:
+                    start = int(prm[b + 2 * D])
+                    for k in range(start, start + count):
+                        best = min(best, element_query(q, prm, elements + stride * k, 0))
+                else:
+                    left = node + 1
+                    right = int(prm[b + 2 * D])
+                    near_left = box_squared_distance(q, prm, nodes + size * left)
+                    near_right = box_squared_distance(q, prm, nodes + size * right)
+                    if near_left <= near_right:
+                        far, near, far_d, near_d = right, left, near_right, near_left
+                    else:
+                        far, near, far_d, near_d = left, right, near_left, near_right
+                    if far_d < shared:
+                        children[j, 0] = far
+                    if near_d < shared:
+                        children[j, 1] = near
+        top -= popped
+        for slot in range(2):
+            for j in range(popped):
+                if children[j, slot] >= 0 and top < 4096:
+                    pending[top] = children[j, slot]
+                    top += 1
+    return float(rounds)
+""".replace("LANES", str(LANES))
 
 
 # ------------------------------------------------------------------------------------ launches
@@ -147,23 +203,28 @@ def counting_nodes(text: str) -> str:
     slot of ``prm``): the nearest element's walk, and any other walk of the tree (a winding number's)."""
     nodes = "node = pending[top]\n"
     assert nodes in text, "nearest_element's walk is not where this script expects it"
+    start = "def nearest_element(q, prm, o, limit):\n"
+    assert start in text, "nearest_element is not where this script expects it"
+    text = text.replace(start, start + "    prm[prm.shape[0] - 3] += lanes_rounds(q, prm, o, limit)\n")
     return text.replace(nodes, nodes + "        prm[prm.shape[0] - 1] += 1.0\n")
 
 
 def counting_prototypes(text: str) -> str:
     """The backend's kernel text with a counter of distance evaluations (the second-last slot of
-    ``prm``), and a converge launch writing each prototype's two counts into the tail of ``prm``."""
+    ``prm``), and a converge launch writing each prototype's three counts into the tail of ``prm``."""
     evaluation = "    feature = sd_feature(x, prm, hint, gap_min)\n"
     assert evaluation in text, "nearest_obstacle's evaluation is not where this script expects it"
     text = text.replace(evaluation, "    prm[prm.shape[0] - 2] += 1.0\n" + evaluation)
     call = ("        converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, "
             "out_points,\n                     out_clearance)\n")
     assert call in text, "converge_all is not where this script expects it"
-    return text.replace(call, (
+    return LANES_ROUNDS + text.replace(call, (
         "        nodes = prm[prm.shape[0] - 1]\n"
-        "        evaluations = prm[prm.shape[0] - 2]\n" + call +
-        "        prm[prm.shape[0] - 3 - 2 * i] = prm[prm.shape[0] - 1] - nodes\n"
-        "        prm[prm.shape[0] - 4 - 2 * i] = prm[prm.shape[0] - 2] - evaluations\n"))
+        "        evaluations = prm[prm.shape[0] - 2]\n"
+        "        rounds = prm[prm.shape[0] - 3]\n" + call +
+        "        prm[prm.shape[0] - 4 - 3 * i] = prm[prm.shape[0] - 1] - nodes\n"
+        "        prm[prm.shape[0] - 5 - 3 * i] = prm[prm.shape[0] - 2] - evaluations\n"
+        "        prm[prm.shape[0] - 6 - 3 * i] = prm[prm.shape[0] - 3] - rounds\n"))
 
 
 def count_walks(shape, count, seed, most_points):
@@ -180,7 +241,7 @@ def count_walks(shape, count, seed, most_points):
     text = counting_prototypes(numba_common.KERNELS + numba_common.ENTRIES)
     namespace = kernel_compile.numba_namespace(program, "cpu", text, numba_common._jit)
     program.source = source
-    params = np.concatenate([flat.params, np.zeros(COUNTERS + 2 * most_points)])
+    params = np.concatenate([flat.params, np.zeros(COUNTERS + 3 * most_points)])
     launches = []
     backend = numba_backend.NumbaBackend(threads=1)
     backend.launch_bound = True  # the GPU's rounds: polishes ahead (its two launches are one on a GPU)
@@ -196,10 +257,15 @@ def count_walks(shape, count, seed, most_points):
             points = len(args[0])
             if points > most_points:
                 raise RuntimeError(f"a converge launch of {points:,} prototypes: pass --most-points above it")
-            tail = params[len(params) - COUNTERS - 2 * points:len(params) - COUNTERS][::-1]
-            nodes, evaluations = tail[0::2], tail[1::2]
+            tail = params[len(params) - COUNTERS - 3 * points:len(params) - COUNTERS][::-1]
+            nodes, evaluations, rounds = tail[0::3], tail[1::3], tail[2::3]
+            # A GPU walks cooperatively in a move launch of few prototypes, and in the set-up's converge
+            # (the first with steps) of a few more (ndpack.backends.warp_lanes).
+            setup = not any(launch["steps"] for launch in launches) and len(args[10]) > 0
+            cooperative = points <= (CONVERGE_MOST if setup else COOPERATIVE_MOST)
             launches.append(dict(prototypes=points, steps=len(args[10]), nodes=float(nodes.sum()),
-                                 most_nodes=float(nodes.max(initial=0)), evaluations=float(evaluations.sum()),
+                                 most_nodes=float(nodes.max(initial=0)), most_rounds=float(rounds.max(initial=0)),
+                                 cooperative=bool(cooperative), evaluations=float(evaluations.sum()),
                                  most_evaluations=float(evaluations.max(initial=0))))
         return result
 
@@ -209,11 +275,14 @@ def count_walks(shape, count, seed, most_points):
     seconds = time.perf_counter() - started
     nodes = sum(launch["nodes"] for launch in launches)
     critical = sum(launch["most_nodes"] for launch in launches)
+    serial = sum(launch["most_nodes"] for launch in launches if not launch["cooperative"])
+    rounds = sum(launch["most_rounds"] for launch in launches if launch["cooperative"])
     prototypes = sum(launch["prototypes"] for launch in launches)
     return dict(backend="numba, 1 thread, instrumented", seconds=seconds, spheres=len(packing),
                 fill=float(packing.fill), converge_launches=len(launches), prototypes_moved=prototypes,
                 nodes=nodes, evaluations=sum(launch["evaluations"] for launch in launches),
                 critical_path_nodes=critical, mean_path_nodes=nodes / max(prototypes, 1),
+                serial_critical_nodes=serial, cooperative_critical_rounds=rounds,
                 critical_over_mean=critical / max(sum(launch["nodes"] / max(launch["prototypes"], 1)
                                                       for launch in launches), 1e-300),
                 launches=launches)
@@ -222,7 +291,8 @@ def count_walks(shape, count, seed, most_points):
 def against(result: dict, profile: dict) -> dict:
     """The counts beside a GPU run of the same packing (``bench/profile_kernels.py``'s JSON, one
     backend): launches per kernel on both, and what the GPU's times imply per unit of counted work,
-    the constants a prediction uses: a move launch's seconds per node of its critical path, the
+    the constants a prediction uses: a move launch's seconds per node of its critical path (with
+    cooperative moves, from the run's ``lanes-off`` variant, and a cooperative round's from the rest), the
     other launches' seconds each, and, where the GPU run timed its stages (``--stages``), the
     host's time in the rounds and the final check over this machine's (the same Python and NumPy
     work on another CPU, with the synchronisations' latency), and the set-up's seconds. Without
@@ -235,11 +305,19 @@ def against(result: dict, profile: dict) -> dict:
     others = sum(entry[1] for name, entry in gpu["kernels"].items() if not name.startswith("move_ids"))
     other_launches = sum(entry[0] for name, entry in gpu["kernels"].items() if not name.startswith("move_ids"))
     host = gpu["median"] - gpu["device"]
+    walks = result["walks"]
     found = dict(rows=rows, same_launches=all(row["cpu_launches"] == row["gpu_launches"] for row in rows),
                  gpu_median_s=gpu["median"], gpu_device_s=gpu["device"], gpu_move_s=moves, gpu_other_s=others,
-                 seconds_per_critical_node=moves / result["walks"]["critical_path_nodes"],
+                 seconds_per_critical_node=moves / walks["critical_path_nodes"],
                  seconds_per_other_launch=others / other_launches,
                  host_seconds_per_sync=host / result["launches"]["syncs"])
+    serial = profile.get("warp lanes-off")
+    if serial is not None and walks.get("cooperative_critical_rounds"):
+        # Cooperative moves: a serial node's seconds from the run without them, a round's from the rest.
+        per_node = sum(entry[1] for name, entry in serial["kernels"].items() if name.startswith("move_ids")) \
+            / walks["critical_path_nodes"]
+        found.update(seconds_per_critical_node=per_node, seconds_per_critical_round=(
+            moves - per_node * walks["serial_critical_nodes"]) / walks["cooperative_critical_rounds"])
     stages = gpu.get("stages")
     if stages and "host_rounds_s" in result["launches"]:
         found.update(gpu_stages=stages, gpu_host_rounds_s=stages["rounds"] - gpu["device"],
@@ -250,13 +328,17 @@ def against(result: dict, profile: dict) -> dict:
 
 def predict(result: dict, constants: dict) -> dict:
     """The GPU's seconds for ``result``'s counts, by the constants another run's ``against`` gave:
-    moves by their critical-path nodes, other launches by their number, the host's rounds and
+    moves by their critical-path nodes (cooperative ones by their rounds, where the constants have
+    them), other launches by their number, the host's rounds and
     the final check by this machine's times of them (scaled), the set-up as measured; with an
     older run's constants (no stages), the host by its synchronisations."""
     counted, walks = result["launches"], result["walks"]
     moves = sum(entry["launches"] for name, entry in counted["kernels"].items() if name.startswith("move_ids"))
     parts = dict(moves=walks["critical_path_nodes"] * constants["seconds_per_critical_node"],
                  other_launches=(counted["launches"] - moves) * constants["seconds_per_other_launch"])
+    if "seconds_per_critical_round" in constants:  # cooperative moves: their rounds, the rest's nodes
+        parts["moves"] = (walks["serial_critical_nodes"] * constants["seconds_per_critical_node"]
+                          + walks["cooperative_critical_rounds"] * constants["seconds_per_critical_round"])
     if "host_over_cpu" in constants and "host_rounds_s" in counted:
         parts.update(host=counted["host_rounds_s"] * constants["host_over_cpu"],
                      verify=counted["verify_s"] * constants["verify_over_cpu"], setup=constants["setup_s"])
@@ -301,7 +383,9 @@ def main():
               f"{found['prototypes_moved']:,.0f} prototypes moved, {found['nodes']:,.0f} tree nodes, "
               f"{found['evaluations']:,.0f} distance evaluations; a launch's slowest prototype summed over "
               f"launches: {found['critical_path_nodes']:,.0f} nodes, {found['critical_over_mean']:.1f}x the "
-              f"mean prototype's ({found['seconds']:.1f} s)")
+              f"mean prototype's ({found['seconds']:.1f} s); cooperative on a GPU: "
+              f"{found['cooperative_critical_rounds']:,.0f} rounds, and {found['serial_critical_nodes']:,.0f} nodes "
+              "in the other launches")
     if args.against and "launches" in result and "walks" in result:
         result["against"] = found = against(result, json.loads(args.against.read_text()))
         print(f"against {args.against.name}: same launches per kernel: {found['same_launches']}; the GPU's "

@@ -28,7 +28,7 @@ from ..kernels.tape import interpreter
 from .base import Backend, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
 from .prototypes import SPREAD_MAX, DevicePrototypes, no_wall
-from .warp_lanes import COOPERATIVE_MOST, LANES, functions_only, has_walk, lanes_text
+from .warp_lanes import CONVERGE_MOST, COOPERATIVE_MOST, LANES, functions_only, has_walk, lanes_text
 
 KERNELS = Path(__file__).with_name("warp_kernels.py").read_text()
 #: Central-difference step as a fraction of the shape's scale, per precision.
@@ -68,8 +68,10 @@ class WarpBackend(Backend):
         self.launch_bound = self.device.is_cuda
         # Threads per prototype in a move launch, at most (prototypes.lane_spread); idle ones cost a CPU.
         self.move_spread = SPREAD_MAX if self.launch_bound else 1
-        # A move launch of at most this many prototypes walks cooperatively (0: never; see warp_lanes).
+        # A move launch of at most this many prototypes walks cooperatively, and a converge of at most
+        # cooperative_converge_most points (0: never; see warp_lanes).
         self.cooperative_most = COOPERATIVE_MOST if self.launch_bound else 0
+        self.cooperative_converge_most = CONVERGE_MOST if self.launch_bound else 0
         self.precision = precision
         self.margin = MARGIN[precision]
         self.float = np.float64 if precision == "float64" else np.float32
@@ -195,11 +197,15 @@ class WarpBackend(Backend):
         out_points = self.wp.empty(len(points), dtype=module.VecD, device=self.device)
         out_clearance = self.wp.empty(len(points), dtype=module.F, device=self.device)
         if len(points):
-            self.wp.launch(module.converge_all, dim=len(points), device=self.device, inputs=[
-                self._points(module, points), self._points(module, cell_lower), self._points(module, cell_upper),
-                self._array(wall, module.F), params, d_centers, d_radii, table, self._array(steps, module.F), h,
-                out_points, out_clearance,
-            ])
+            inputs = [self._points(module, points), self._points(module, cell_lower), self._points(module, cell_upper),
+                      self._array(wall, module.F), params, d_centers, d_radii, table, self._array(steps, module.F), h,
+                      out_points, out_clearance]
+            lanes = self._lanes_module(shape) if len(points) <= self.cooperative_converge_most else None
+            if lanes is not None:
+                self.wp.launch_tiled(lanes.converge_all_lanes, dim=[len(points)], inputs=inputs, block_dim=LANES,
+                                     device=self.device)
+            else:
+                self.wp.launch(module.converge_all, dim=len(points), device=self.device, inputs=inputs)
         return (out_points.numpy().reshape(len(points), -1).astype(np.float64),
                 out_clearance.numpy().astype(np.float64))
 

@@ -47,6 +47,10 @@ LANES = 32
 #: threads a prototype (4,096 prototypes) took 0.81 s of device time, from 32 (1,024) 0.94 s,
 #: never 1.28 s.
 COOPERATIVE_MOST = 4096
+#: The same for the converge of a packing's set-up (:data:`CONVERGE_KERNEL`), one launch over every
+#: cell: at 100,000 spheres of the armadillo 5,018 cells, whose slowest walked 10x the mean's nodes
+#: (bench/work_model.py), so the longest chain outweighs a second wave of blocks.
+CONVERGE_MOST = 8192
 
 _NEAREST_LANES = '''
 @wp.func
@@ -135,6 +139,21 @@ def functions_only(kernels: str) -> str:
     function only where a kernel calls it)."""
     return re.sub(r"^@wp\.kernel\n.*?(?=^\S)", "", kernels + "\n#", flags=re.M | re.S)
 
+CONVERGE_KERNEL = '''
+@wp.kernel
+def converge_all_lanes(points: wp.array(dtype=VecD), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
+                       wall: wp.array(dtype=F), prm: wp.array(dtype=F), centers: wp.array(dtype=VecD),
+                       radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32), steps: wp.array(dtype=F), h: F,
+                       out_points: wp.array(dtype=VecD), out_clearance: wp.array(dtype=F)):
+    """converge_all with a block of lanes per point (a tiled launch), walking together."""
+    i, lane = wp.tid()
+    best, best_clearance = converge_from_lanes(points[i], lower[i], upper[i], wall[i], prm, centers, radii, nbr, i,
+                                               steps, h)
+    if lane == 0:
+        out_points[i] = best
+        out_clearance[i] = best_clearance
+'''
+
 
 def has_walk(text: str) -> bool:
     """Whether a module's text walks a mesh's (or outline's) tree in the kernel language."""
@@ -151,9 +170,9 @@ def _definition(text: str, name: str) -> str:
 
 def lanes_text(text: str, capacity: int = STACK_CAPACITY) -> str:
     """The cooperative move of a module whose ``text`` (program and kernels) walks a tree
-    (:func:`has_walk`): the :data:`CHAIN` copied with the suffix, the walk (:func:`nearest_lanes`)
-    and :data:`MOVE_KERNEL`."""
+    (:func:`has_walk`): the :data:`CHAIN` copied with the suffix, the walk (:func:`nearest_lanes`),
+    :data:`MOVE_KERNEL` and :data:`CONVERGE_KERNEL`."""
     calls = re.compile(r"\b(" + "|".join((*CHAIN, "nearest_element")) + r")\(")
     copies = [calls.sub(lambda m: m.group(1) + SUFFIX + "(", _definition(text, name)) for name in CHAIN]
     return "\n\n".join(["# Cooperative moves: see ndpack.backends.warp_lanes.", nearest_lanes(capacity), *copies,
-                        MOVE_KERNEL])
+                        MOVE_KERNEL, CONVERGE_KERNEL])

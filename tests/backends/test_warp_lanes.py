@@ -95,6 +95,7 @@ def test_copies_call_the_cooperative_chain():
         assert f" {name}(" not in text.split("# Cooperative moves")[1].replace(f"def {name}_lanes(", "")
     assert "@wp.kernel" not in functions_only(KERNELS)
     assert "def converge_from(" in functions_only(KERNELS)
+    assert "def move_ids_lanes(" in text and "def converge_all_lanes(" in text
     assert not has_walk(compiled_program(shape).program.source("warp", "float32"))  # wp.Mesh answers there
 
 
@@ -103,7 +104,8 @@ def test_cooperative_moves_pack_as_the_plain_ones(cpu_blocks):
     packings = []
     for cooperative in (0, 4096):
         backend = get_backend("warp", device="cpu")
-        backend.launch_bound, backend.move_spread, backend.cooperative_most = True, 32, cooperative
+        backend.launch_bound, backend.move_spread = True, 32
+        backend.cooperative_most = backend.cooperative_converge_most = cooperative
         packings.append(nd.pack(shape, 25, mode="fast", backend=backend, seed=3, progress=False))
     plain, shared = packings
     assert len(plain) == len(shared) == 25
