@@ -83,12 +83,19 @@ SOURCES = {
            ("million_h100host_numba_cube_issue48_step2.json", "b55d5e0", "million"),
            ("million_h100_square_issue48_step2.json", "b55d5e0", "square"),
            ("million_h100host_numba_square_issue48_step2.json", "b55d5e0", "square")]},
-    # Issue 48's third step (cooperative moves): bench/gpu_issue48_step3.sh MODE.
-    **{name: Source("H200, NumPy 2.5", "5d70ad2", f"bash bench/gpu_issue48_step3.sh {mode}", "2026-11-27")
-       for name, mode in [("profile_kernels_h200_armadillo_issue48_step3.json", "lanes"),
-                          ("profile_kernels_h200host_numba_armadillo_issue48_step3.json", "lanes"),
-                          ("million_h200_armadillo_issue48_step3.json", "million")]},
+    # Issue 48's cooperative walks: bench/gpu_issue48_step4.sh MODE (step3.sh: moves only, the constants' run).
+    **{name: Source("H200, NumPy 2.5", "39d016d", f"bash bench/gpu_issue48_step4.sh {mode}", "2026-11-27")
+       for name, mode in [("profile_kernels_h200_armadillo_issue48_step4.json", "lanes"),
+                          ("profile_kernels_h200host_numba_armadillo_issue48_step4.json", "lanes"),
+                          ("million_h200_armadillo_issue48_step4.json", "million")]},
+    "profile_kernels_h200_armadillo_issue48_step3.json": Source(
+        "H200, NumPy 2.5", "5d70ad2", "bash bench/gpu_issue48_step3.sh lanes", "2026-11-27"),
     "cooperative_walk_2core_armadillo.json": Source("2 cores", "5d70ad2", "python bench/cooperative_walk.py"),
+    **{f"work_model_2core_armadillo_100k_issue48_{step}.json": Source(
+        "2 cores", "39d016d", "python bench/work_model.py --mesh armadillo.obj --count 100000 "
+        f"--against bench/results/profile_kernels_h200_armadillo_issue48_{step}.json" + constants)
+       for step, constants in [("step3", ""), ("step4", " --constants bench/results/"
+                                               "work_model_2core_armadillo_100k_issue48_step3.json")]},
     "profile_kernels_h100_armadillo_issue48_before.json": Source(
         "H100, NumPy 2.5", "e08d8b4", "python3 bench/profile_kernels.py --backends warp numba --mesh armadillo.obj "
         "--count 100000 --repeats 3 --stages --host-profile", "2026-11-27"),
@@ -313,12 +320,13 @@ def intro() -> list[str]:
 def scale_h100() -> list[str]:
     arm = load("profile_kernels_h100_armadillo_issue48_step2.json")["warp now"]
     cube = load("round_time_h100_cube_issue20_step7.json")["results"]
-    lanes = load("profile_kernels_h200_armadillo_issue48_step3.json")
-    arm3, arm3_off = lanes["warp now"], lanes["warp lanes-off"]
-    arm3_cpu = load("profile_kernels_h200host_numba_armadillo_issue48_step3.json")["numba"]
-    arm3_1m = load("million_h200_armadillo_issue48_step3.json")
+    lanes = load("profile_kernels_h200_armadillo_issue48_step4.json")
+    arm3, arm3_off, converge_off = lanes["warp now"], lanes["warp lanes-off"], lanes["warp converge-off"]
+    arm3_cpu = load("profile_kernels_h200host_numba_armadillo_issue48_step4.json")["numba"]
+    arm3_1m = load("million_h200_armadillo_issue48_step4.json")
     walk = load("cooperative_walk_2core_armadillo.json")["limits"]["last step's element"]
-    compiled = (RESULTS / "compile_h200_issue48_step3.txt").read_text()
+    model4 = load("work_model_2core_armadillo_100k_issue48_step4.json")
+    compiled = (RESULTS / "compile_h200_issue48_step4.txt").read_text()
     first_h200 = float(re.search(r"cache empty: ([0-9.]+) s", compiled)[1])
     cube_1m, cube_1m_cpu = load("million_h100_cube_issue48_step2.json")["warp"], \
         load("million_h100host_numba_cube_issue48_step2.json")["numba"]
@@ -341,15 +349,19 @@ def scale_h100() -> list[str]:
     names = ["set-up", "move launches", "other launches", "host, in the rounds", "final check", "whole call"]
     guess = [predicted["setup"], predicted["moves"], predicted["other_launches"], predicted["host"],
              predicted["verify"], predicted["seconds"]]
-    split = [[name, seconds(old), seconds(new), seconds(model_)]
-             for name, old, new, model_ in zip(names, parts(before), parts(arm), guess)]
+    predicted4 = model4["prediction"]
+    guess4 = [predicted4["setup"], predicted4["moves"], predicted4["other_launches"], predicted4["host"],
+              predicted4["verify"], predicted4["seconds"]]
+    split = [[name, seconds(old), seconds(new), seconds(model_), seconds(new4), seconds(model4_)]
+             for name, old, new, model_, new4, model4_ in zip(names, parts(before), parts(arm), guess, parts(arm3),
+                                                               guess4)]
     rows = [
         ["armadillo (100k triangles)", "100,000", seconds(arm3["median"]), "", seconds(arm3_cpu["median"]),
-         f"{arm3['fill']:.4f}", "**H200**, medians of 3, 5d70ad2"],
+         f"{arm3['fill']:.4f}", "**H200**, medians of 3, 39d016d"],
         ["unit cube", "100,000", *[seconds(median_of(cube, backend=b)) for b in ("warp", "numba-cuda", "numba")],
          f"{median_of(cube, 'fill', backend='warp'):.4f}", "medians of 2, 4ea141e"],
         ["armadillo (100k triangles)", "1,000,000", seconds(arm3_1m["warp now"]["median"]), "", "",
-         f"{arm3_1m['warp now']['fill']:.4f}", "**H200**, median of 2, 5d70ad2"],
+         f"{arm3_1m['warp now']['fill']:.4f}", "**H200**, median of 2, 39d016d"],
         ["unit cube", "1,000,000", seconds(cube_1m["median"]), "", seconds(cube_1m_cpu["median"]),
          f"{cube_1m['fill']:.4f}", "median of 3 (numba: 1), b55d5e0"],
         ["unit square", "1,000,000", seconds(square_1m["median"]), "", seconds(square_1m_cpu["median"]),
@@ -362,7 +374,7 @@ def scale_h100() -> list[str]:
     policy = ", ".join(f"{short} {fill[(name, 'fast, GPU policies')] / fill[(name, 'faithful')]:.4f}"
                        for name, short in cases)
     return [
-        "## Packing at scale: H100",
+        "## Packing at scale: H100 (and H200)",
         "",
         "Fast mode, seed 0: seconds of the whole `nd.pack` call, the final float64 check included, the compile apart",
         "(a warm-up packing first). numba-cuda was not run on 3ffe337 or later (the image's NumPy 2.5 breaks it).",
@@ -373,25 +385,28 @@ def scale_h100() -> list[str]:
         f"{square_1m_cpu['median'] / square_1m['median']:.1f}x on the square at a million (goals: 5x; 1 s, 8 s, 5 s). "
         f"A GPU's fast mode fills at 10,000 spheres this fraction of the faithful mode's: {policy}.",
         "",
-        "The armadillo's time before and after issue 48's second step (stages end with a device sync), and the work",
-        "model's prediction of the second from the first's constants and the work counted on 2 cores "
+        "The armadillo at 100,000 by stage (each ends with a device sync) through issue 48's steps, and the work "
+        "model's predictions from an earlier run's constants and the work counted on 2 cores "
         f"(`bench/work_model.py`; same launches: {'yes' if gpu['same_launches'] else 'no'}):",
         "",
-        *table(["stage", "before (e08d8b4)", "now (3ffe337)", "predicted"], split),
+        *table(["stage", "H100, before (e08d8b4)", "H100, 3ffe337", "predicted", "H200, cooperative (39d016d)",
+                "predicted (5d70ad2's constants)"], split),
         f"A move launch lasts as long as its slowest thread's chain ({1e6 * gpu['seconds_per_critical_node']:.2f} us a "
         f"node); the host's round takes {gpu['host_over_cpu']:.1f}x its 2-core time. The final check finds overlaps in "
         "a grid's sorted rows (Numba), not k-d trees. Cells split finer (ratio 2.5, not 4) filled 0.5% more in 34 "
         "rounds, but took 2.72 s, not 2.07 s ([output](../bench/results/split_ratio_h100_issue48.txt)).",
-        f"**Cooperative moves** (5d70ad2, H200): a block of 32 threads walks one prototype's mesh tree (worst query "
+        f"**Cooperative walks** (H200): a block of 32 threads walks one prototype's mesh tree (worst query "
         f"{walk['serial_nodes_most']:,.0f} nodes, {walk['32: rounds_most']:.0f} rounds), in move launches of at most "
-        f"4,096 prototypes. Without, the armadillo took {seconds(arm3_off['median'])} at 100,000 (device "
-        f"{seconds(arm3_off['device'])}, with {seconds(arm3['device'])}) and "
-        f"{seconds(arm3_1m['warp lanes-off']['median'])} at a million. A fresh machine's first packing of a mesh on "
+        f"4,096 prototypes and the set-up's converge. Without, the armadillo took {seconds(arm3_off['median'])} at "
+        f"100,000 (device {seconds(arm3_off['device'])}, with {seconds(arm3['device'])}; without in the set-up "
+        f"{seconds(converge_off['median'])}) and {seconds(arm3_1m['warp lanes-off']['median'])} at a million. The "
+        f"model's moves: {seconds(predicted4['moves'])} predicted, {seconds(parts(arm3)[1])} measured; its set-up is "
+        "the constants' run's, before the cooperative set-up. A fresh machine's first packing of a mesh on "
         f"Warp, caches empty, took {optimised['default']['first_packing_s']:.0f} s at Warp's default optimisation "
         f"(the notices said 15, 30, 12 s), {optimised['O2']['first_packing_s']:.1f} s at level 2, ndpack's now "
         f"(H100; packing {optimised['default']['median_s']:.2f} and {optimised['O2']['median_s']:.2f} s); with the "
         f"cooperative module to compile too, {first_h200:.1f} s on the H200 "
-        "([output](../bench/results/compile_h200_issue48_step3.txt)).",
+        "([output](../bench/results/compile_h200_issue48_step4.txt)).",
         *sources("profile_kernels_h100_armadillo_issue48_step2.json",
                  "profile_kernels_h100host_numba_armadillo_issue48_step2.json",
                  "million_h100_cube_issue48_step2.json", "million_h100_armadillo_issue48_step2.json",
@@ -400,9 +415,11 @@ def scale_h100() -> list[str]:
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
                  "work_model_2core_armadillo_100k_issue48_before.json",
                  "work_model_2core_armadillo_100k_issue48_step2.json", "policy_fill_2core_10k.json",
-                 "compile_options_h100_issue48.json", "profile_kernels_h200_armadillo_issue48_step3.json",
-                 "profile_kernels_h200host_numba_armadillo_issue48_step3.json",
-                 "million_h200_armadillo_issue48_step3.json", "cooperative_walk_2core_armadillo.json"),
+                 "compile_options_h100_issue48.json", "profile_kernels_h200_armadillo_issue48_step4.json",
+                 "profile_kernels_h200host_numba_armadillo_issue48_step4.json",
+                 "million_h200_armadillo_issue48_step4.json", "profile_kernels_h200_armadillo_issue48_step3.json",
+                 "cooperative_walk_2core_armadillo.json", "work_model_2core_armadillo_100k_issue48_step3.json",
+                 "work_model_2core_armadillo_100k_issue48_step4.json"),
     ]
 
 

@@ -42,14 +42,14 @@ SUFFIX = "_lanes"
 #: (Warp compiles a module once per block size it is launched with).
 LANES = 32
 #: On a GPU, a move launch of at most this many prototypes is cooperative: 4,096 blocks of 32
-#: stay resident together on an H100 (32 blocks on each of 132 SMs). Measured on an H200 at
-#: 100,000 spheres of the armadillo (bench/profile_kernels.py --variants): cooperative moves from 8
-#: threads a prototype (4,096 prototypes) took 0.81 s of device time, from 32 (1,024) 0.94 s,
-#: never 1.28 s.
+#: stay resident together on an H100 (32 blocks on each of 132 SMs). The device's time at 100,000
+#: spheres of the armadillo on an H200 (bench/gpu_issue48_step3.sh lanes), with moves of at most
+#: 1,024, 4,096, 8,192 and 16,384 prototypes cooperative: 0.93, 0.80, 0.88 and 0.88 s; never 1.28 s.
 COOPERATIVE_MOST = 4096
 #: The same for the converge of a packing's set-up (:data:`CONVERGE_KERNEL`), one launch over every
 #: cell: at 100,000 spheres of the armadillo 5,018 cells, whose slowest walked 10x the mean's nodes
-#: (bench/work_model.py), so the longest chain outweighs a second wave of blocks.
+#: (bench/work_model.py), so the longest chain outweighs a second wave of blocks: the set-up took
+#: 0.06 s against 0.24 s (H200, bench/gpu_issue48_step4.sh lanes).
 CONVERGE_MOST = 8192
 
 _NEAREST_LANES = '''
