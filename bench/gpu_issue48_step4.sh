@@ -8,6 +8,8 @@
 #        every launch timed in a second run; numba on the host's cores beside them
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step4.sh million   the armadillo at 1,000,000, now and
 #        lanes-off (2 runs each)
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step4.sh share     the armadillo at 100,000, the lanes
+#        agreeing on the best distance every 1, 4 and 16 rounds (4 runs each: the first compiles)
 set -uo pipefail
 source bench/gpu_header.sh
 [ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
@@ -42,5 +44,11 @@ PY
       --stages --no-profiled --variants now lanes-off --out "$OUT/million_${CARD}_armadillo_issue48_step4.json" \
       2>&1 | grep -v "^Warp\|^Module"
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step4.sh lanes|million" >&2; exit 2 ;;
+  share)
+    export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
+    timeout 300 python3 bench/profile_kernels.py --backends warp --mesh /tmp/armadillo.obj --count 100000 \
+      --repeats 4 --stages --variants share-1 share-4 share-16 \
+      --out "$OUT/share_${CARD}_armadillo_issue48_step4.json" 2>&1 | grep -v "^Warp\|^Module" | grep "==\|move_ids\|against"
+    ;;
+  *) echo "usage: bash bench/gpu_issue48_step4.sh lanes|million|share" >&2; exit 2 ;;
 esac

@@ -17,7 +17,8 @@ spreads a move launch over at most 2^k threads (``prototypes.SPREAD_THREADS``); 
 cells down to R times the frontier on a GPU (``rounds.SPLIT_RATIO_AHEAD``); ``lanes-N`` walks a
 mesh's tree cooperatively in move launches of at most N prototypes (``lanes-off``: never, in moves
 or the set-up's converge; ``converge-off``: not in the set-up's converge; the backend's
-``cooperative_most`` and ``cooperative_converge_most``, see :mod:`ndpack.backends.warp_lanes`).
+``cooperative_most`` and ``cooperative_converge_most``, see :mod:`ndpack.backends.warp_lanes`);
+``share-N``: the lanes agree on the best distance every N rounds (``cooperative_share``).
 Each variant's spheres are set beside the first variant's: their count and the largest change of
 a radius, sorted.
 Each variant is also timed unprofiled ``--repeats`` times (median). ``--host-profile`` prints
@@ -47,7 +48,8 @@ from ndpack.backends import get_backend, prototypes
 VARIANTS = {"now": {}, "no-ahead": {"launch_bound": False}, "spread-1": {"move_spread": 1},
             **{f"lanes-{most}": {"cooperative_most": most} for most in (1024, 8192, 16384)},
             "lanes-off": {"cooperative_most": 0, "cooperative_converge_most": 0},
-            "converge-off": {"cooperative_converge_most": 0}}
+            "converge-off": {"cooperative_converge_most": 0},
+            **{f"share-{rounds}": {"cooperative_share": rounds} for rounds in (1, 4, 16)}}
 #: Variants that set ``prototypes.SPREAD_THREADS`` instead: a move launch's most threads.
 THREAD_VARIANTS = {f"threads-2^{bits}": 1 << bits for bits in (15, 16, 18, 19, 20)}
 #: Variants that set the GPU's split ratio (``rounds.SPLIT_RATIO_AHEAD``) instead.

@@ -33,7 +33,26 @@ def test_the_counters_go_where_the_walks_are(work_model):
     # Every walk of the tree counts: the nearest element's, and the winding number's where it walks.
     assert program.count("prm[prm.shape[0] - 1] += 1.0") == program.count("node = pending[top]\n") >= 1
     assert kernels.count("prm[prm.shape[0] - 2] += 1.0") == 1
-    assert "prm[prm.shape[0] - 3 - 2 * i]" in kernels
+    # The cooperative rounds: counted once a nearest-element query, and three counts a prototype.
+    assert program.count("prm[prm.shape[0] - 3] += lanes_rounds(q, prm, o, limit)") == 1
+    assert "def lanes_rounds(" in kernels
+    for slot in ("4 - 3 * i", "5 - 3 * i", "6 - 3 * i"):
+        assert f"prm[prm.shape[0] - {slot}]" in kernels
+
+
+def test_cooperative_rounds_are_counted_beside_the_nodes(work_model):
+    """The walks' instrumented run on a small mesh: a cooperative launch's rounds, fewer than the
+    nodes of its slowest prototype's walks (32 lanes; the deepest query of a small tree still
+    visits more nodes than the tree is deep)."""
+    mesh = nd.TriangleMesh.load(ROOT / "tests" / "data" / "meshes" / "cow.ply")
+    found = work_model.count_walks(mesh, 200, seed=0, most_points=200_000)
+    launches = found["launches"]
+    assert found["spheres"] == 200 and all(launch["cooperative"] for launch in launches
+                                            if 0 < launch["prototypes"] <= 4096)
+    walked = [launch for launch in launches if launch["steps"] and launch["most_nodes"] > 0]
+    assert walked and all(0 < launch["most_rounds"] < launch["most_nodes"] for launch in walked)
+    assert found["cooperative_critical_rounds"] == sum(launch["most_rounds"] for launch in launches
+                                                       if launch["cooperative"])
 
 
 def test_launches_are_counted_per_round(work_model):
@@ -64,3 +83,18 @@ def test_the_host_is_predicted_from_its_own_time(work_model):
     del profile["warp"]["stages"]
     older = work_model.predict(result, work_model.against(result, profile))
     assert "verify" not in older and older["host"] == pytest.approx(1.0)  # 20 syncs of (2.0 - 1.0) / 20 s
+
+
+def test_cooperative_moves_take_a_node_and_a_round_constant(work_model):
+    """A run with cooperative walks and its lanes-off variant: a serial node's seconds from the
+    variant, a cooperative round's from the rest of the run's move time; the prediction adds both."""
+    counted = dict(kernels={"move_ids[move+ahead]": dict(launches=10), "select_all": dict(launches=5)}, launches=15,
+                   syncs=5)
+    walks = dict(critical_path_nodes=1e5, serial_critical_nodes=2e4, cooperative_critical_rounds=1e4)
+    result = dict(launches=counted, walks=walks)
+    now = dict(median=1.0, device=0.6, kernels={"move_ids[move+ahead]": [10, 0.5], "select_all": [5, 0.1]})
+    off = dict(median=2.0, device=1.2, kernels={"move_ids[move+ahead]": [10, 1.0], "select_all": [5, 0.1]})
+    constants = work_model.against(result, {"warp now": now, "warp lanes-off": off})
+    assert constants["seconds_per_critical_node"] == pytest.approx(1e-5)  # 1.0 s over 1e5 nodes
+    assert constants["seconds_per_critical_round"] == pytest.approx((0.5 - 2e4 * 1e-5) / 1e4)
+    assert work_model.predict(result, constants)["moves"] == pytest.approx(0.5)

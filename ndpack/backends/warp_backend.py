@@ -28,7 +28,7 @@ from ..kernels.tape import interpreter
 from .base import Backend, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
 from .prototypes import SPREAD_MAX, DevicePrototypes, no_wall
-from .warp_lanes import CONVERGE_MOST, COOPERATIVE_MOST, LANES, functions_only, has_walk, lanes_text
+from .warp_lanes import CONVERGE_MOST, COOPERATIVE_MOST, LANES, SHARE_EVERY, functions_only, has_walk, lanes_text
 
 KERNELS = Path(__file__).with_name("warp_kernels.py").read_text()
 #: Central-difference step as a fraction of the shape's scale, per precision.
@@ -72,11 +72,12 @@ class WarpBackend(Backend):
         # cooperative_converge_most points (0: never; see warp_lanes).
         self.cooperative_most = COOPERATIVE_MOST if self.launch_bound else 0
         self.cooperative_converge_most = CONVERGE_MOST if self.launch_bound else 0
+        self.cooperative_share = SHARE_EVERY  # rounds between the lanes' agreements (warp_lanes)
         self.precision = precision
         self.margin = MARGIN[precision]
         self.float = np.float64 if precision == "float64" else np.float32
         self._modules = {}  # id(program) -> (program, module)
-        self._lanes = {}  # id(program) -> (program, its cooperative module or None)
+        self._lanes = {}  # (id(program), cooperative_share) -> (program, its cooperative module or None)
         self._params = weakref.WeakKeyDictionary()  # shape -> its numbers on the device
         self._spheres = {}
 
@@ -113,15 +114,17 @@ class WarpBackend(Backend):
         """The cooperative move of ``shape``'s program (:mod:`~ndpack.backends.warp_lanes`), in a
         module of its own compiled for blocks of ``LANES``; None where the program walks no tree."""
         program = compiled_program(shape).program
-        if id(program) not in self._lanes:
+        key = (id(program), self.cooperative_share)
+        if key not in self._lanes:
             module = None
             source = program.source("warp", self.precision)
             if has_walk(source):
-                kernels = functions_only(KERNELS) + "\n\n" + lanes_text(source + "\n\n" + KERNELS)
+                kernels = functions_only(KERNELS) + "\n\n" + lanes_text(source + "\n\n" + KERNELS,
+                                                                         share=self.cooperative_share)
                 module = warp_module(program, self.precision, kernels, self.device, block_dim=LANES,
                                      what=" (cooperative moves)")
-            self._lanes[id(program)] = (program, module)
-        return self._lanes[id(program)][1]
+            self._lanes[key] = (program, module)
+        return self._lanes[key][1]
 
     def _geometry(self, dim):
         """The shape-free kernels (near_spheres, touched) for dimension ``dim``: those of the

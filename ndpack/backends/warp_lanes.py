@@ -10,9 +10,9 @@ prototype, from a module of its own (:func:`functions_only`). Every lane of the 
 prototype's whole move (the same numbers, so the same branches), and only the walk is shared
 (:func:`nearest_lanes`): each round the lanes pop up to one node each from a stack in the block's
 shared memory, test it, push the children that may hold something nearer, and agree on the best
-distance so far. A query's chain shrinks from the nodes it visits to about their number over the
-lanes plus the tree's depth: ``bench/cooperative_walk.py`` counts 1,273 nodes against 47 rounds
-at the armadillo's worst point, 47 against 16 on the mean.
+distance so far (every :data:`SHARE_EVERY` rounds). A query's chain shrinks from the nodes it
+visits to about their number over the lanes plus the tree's depth: ``bench/cooperative_walk.py``
+counts 1,273 nodes against 47 rounds at the armadillo's worst point, 47 against 16 on the mean.
 
 The answer is the walk's: the nearest element closer than the limit (of equal distances, the
 smallest id; the serial walk keeps the first it meets). A stack that would overflow makes every
@@ -36,6 +36,14 @@ CHAIN = ("surface_feature", "sd_feature", "nearest_obstacle", "free_space", "con
 #: Nodes the block's shared stack holds (int32: 4 KB a block); more make the lanes walk alone.
 #: The armadillo's deepest stack at 32 lanes was 310 (no limit) and 121 (the last step's element).
 STACK_CAPACITY = 1024
+#: The lanes agree on the best distance every this many rounds; in between each prunes by its own
+#: (and the limit). A converge step's limit is the last step's element, as tight as the answer:
+#: sharing then changes nothing (bench/cooperative_walk.py: 16.0 rounds on the mean, 47 at most,
+#: sharing every round or never); a first query, with no limit, takes 26.1 rounds sharing every
+#: round, 27.6 every 4, 36.3 never. Nor is agreeing what a round costs: the move launches took
+#: 0.524, 0.522 and 0.516 s sharing every 1, 4 and 16 rounds (H200, armadillo at 100,000;
+#: bench/gpu_issue48_step4.sh share), so the lanes agree every round.
+SHARE_EVERY = 1
 #: Suffix of the copies.
 SUFFIX = "_lanes"
 #: Threads of a cooperative block: one warp. Its module is compiled for this block size alone
@@ -63,11 +71,13 @@ def nearest_element_lanes(q: Any, prm: wp.array(dtype=F), o: int, limit: F):
     lane = wp.untile(wp.tile_scan_exclusive(wp.tile(int(1))))
     pending = wp.tile_stack(capacity=CAPACITY, dtype=int)
     wp.tile_stack_push(pending, 0, lane == 0)
-    best = limit  # the block's best so far, the same in every lane
+    best = limit  # the best this lane knows of: its own, and the block's every SHARE rounds
     mine = limit  # this lane's
     found = int(-1)
     lost = int(0)
+    rounds = int(0)
     while wp.tile_stack_count(pending) > 0:
+        rounds += 1
         node, slot = wp.tile_stack_pop(pending)
         far = int(-1)
         near = int(-1)
@@ -102,10 +112,14 @@ def nearest_element_lanes(q: Any, prm: wp.array(dtype=F), o: int, limit: F):
         kept_near = wp.tile_stack_push(pending, near, near >= 0)
         if (far >= 0 and kept_far < 0) or (near >= 0 and kept_near < 0):
             lost = 1
-        best = wp.min(best, wp.tile_min(wp.tile(mine))[0])
+        if rounds % SHARE == 0:  # the same in every lane: the block agrees
+            best = wp.min(best, wp.tile_min(wp.tile(mine))[0])
+        else:
+            best = wp.min(best, mine)
     if wp.tile_max(wp.tile(lost))[0] > 0:
         return nearest_element(q, prm, o, limit)
     # Of the lanes holding the best distance, the smallest element (-1 where none was nearer).
+    best = wp.tile_min(wp.tile(mine))[0]
     key = int(2147483647)
     if mine == best:
         key = found
@@ -114,9 +128,10 @@ def nearest_element_lanes(q: Any, prm: wp.array(dtype=F), o: int, limit: F):
 
 
 
-def nearest_lanes(capacity: int = STACK_CAPACITY) -> str:
-    """Warp text of ``nearest_element_lanes``, its stack holding ``capacity`` nodes."""
-    return _NEAREST_LANES.replace("CAPACITY", str(int(capacity)))
+def nearest_lanes(capacity: int = STACK_CAPACITY, share: int = SHARE_EVERY) -> str:
+    """Warp text of ``nearest_element_lanes``, its stack holding ``capacity`` nodes, the lanes
+    agreeing on the best distance every ``share`` rounds."""
+    return _NEAREST_LANES.replace("CAPACITY", str(int(capacity))).replace("SHARE", str(int(share)))
 
 
 MOVE_KERNEL = '''
@@ -168,11 +183,11 @@ def _definition(text: str, name: str) -> str:
     return found.group(0)
 
 
-def lanes_text(text: str, capacity: int = STACK_CAPACITY) -> str:
+def lanes_text(text: str, capacity: int = STACK_CAPACITY, share: int = SHARE_EVERY) -> str:
     """The cooperative move of a module whose ``text`` (program and kernels) walks a tree
     (:func:`has_walk`): the :data:`CHAIN` copied with the suffix, the walk (:func:`nearest_lanes`),
     :data:`MOVE_KERNEL` and :data:`CONVERGE_KERNEL`."""
     calls = re.compile(r"\b(" + "|".join((*CHAIN, "nearest_element")) + r")\(")
     copies = [calls.sub(lambda m: m.group(1) + SUFFIX + "(", _definition(text, name)) for name in CHAIN]
-    return "\n\n".join(["# Cooperative moves: see ndpack.backends.warp_lanes.", nearest_lanes(capacity), *copies,
-                        MOVE_KERNEL, CONVERGE_KERNEL])
+    return "\n\n".join(["# Cooperative moves: see ndpack.backends.warp_lanes.", nearest_lanes(capacity, share),
+                        *copies, MOVE_KERNEL, CONVERGE_KERNEL])

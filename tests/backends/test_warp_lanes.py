@@ -51,15 +51,16 @@ def lumpy_sphere(subdivisions=2):
     return nd.TriangleMesh(sphere.vertices * lumps[:, None] + [0.2, -0.1, 0.3], sphere.faces)
 
 
-@pytest.mark.parametrize("capacity", [1024, 2], ids=["stack", "overflowing stack"])
+@pytest.mark.parametrize(("capacity", "share"), [(1024, 1), (1024, 3), (2, 1)],
+                         ids=["stack", "sharing every 3 rounds", "overflowing stack"])
 @pytest.mark.parametrize("lanes", [8, 32])
-def test_cooperative_walk_finds_the_serial_nearest(cpu_blocks, capacity, lanes):
+def test_cooperative_walk_finds_the_serial_nearest(cpu_blocks, capacity, share, lanes):
     shape = lumpy_sphere()
     flat = compiled_program(shape)
     program = flat.program
     assert has_walk(program.source("warp", "float64"))
-    module = warp_module(program, "float64", nearest_lanes(capacity) + TEST_KERNEL, "cpu", block_dim=lanes,
-                         what=f" (test of {lanes} lanes, stack {capacity})")
+    module = warp_module(program, "float64", nearest_lanes(capacity, share) + TEST_KERNEL, "cpu", block_dim=lanes,
+                         what=f" (test of {lanes} lanes, stack {capacity}, sharing every {share})")
     prm = wp.array(flat.params, dtype=wp.float64, device="cpu")
     o = int(flat.params[1])
     rng = np.random.default_rng(7)
