@@ -84,6 +84,10 @@ SOURCES = {
            ("million_h100_square_issue48_step2.json", "b55d5e0", "square"),
            ("million_h100host_numba_square_issue48_step2.json", "b55d5e0", "square")]},
     # Issue 48's cooperative walks: bench/gpu_issue48_step4.sh MODE (step3.sh: moves only, the constants' run).
+    **{name: Source("H100, NumPy 2.5", "5c7e1fc", f"bash bench/gpu_issue48_step4.sh {mode}", "2026-11-27")
+       for name, mode in [("profile_kernels_h100_armadillo_issue48_step4.json", "lanes"),
+                          ("profile_kernels_h100host_numba_armadillo_issue48_step4.json", "lanes"),
+                          ("million_h100_armadillo_issue48_step4.json", "million")]},
     **{name: Source("H200, NumPy 2.5", "39d016d", f"bash bench/gpu_issue48_step4.sh {mode}", "2026-11-27")
        for name, mode in [("profile_kernels_h200_armadillo_issue48_step4.json", "lanes"),
                           ("profile_kernels_h200host_numba_armadillo_issue48_step4.json", "lanes"),
@@ -326,8 +330,11 @@ def scale_h100() -> list[str]:
     arm3_1m = load("million_h200_armadillo_issue48_step4.json")
     walk = load("cooperative_walk_2core_armadillo.json")["limits"]["last step's element"]
     model4 = load("work_model_2core_armadillo_100k_issue48_step4.json")
-    compiled = (RESULTS / "compile_h200_issue48_step4.txt").read_text()
-    first_h200 = float(re.search(r"cache empty: ([0-9.]+) s", compiled)[1])
+    cold = {card: float(re.search(r"cache empty: ([0-9.]+) s", (RESULTS / f"compile_{card}_issue48_step4.txt")
+                                  .read_text())[1]) for card in ("h100", "h200")}
+    h100 = load("profile_kernels_h100_armadillo_issue48_step4.json")
+    h100_cpu = load("profile_kernels_h100host_numba_armadillo_issue48_step4.json")["numba"]
+    h100_1m = load("million_h100_armadillo_issue48_step4.json")
     cube_1m, cube_1m_cpu = load("million_h100_cube_issue48_step2.json")["warp"], \
         load("million_h100host_numba_cube_issue48_step2.json")["numba"]
     square_1m, square_1m_cpu = load("million_h100_square_issue48_step2.json")["warp"], \
@@ -356,12 +363,12 @@ def scale_h100() -> list[str]:
              for name, old, new, model_, new4, model4_ in zip(names, parts(before), parts(arm), guess, parts(arm3),
                                                                guess4)]
     rows = [
-        ["armadillo (100k triangles)", "100,000", seconds(arm3["median"]), "", seconds(arm3_cpu["median"]),
-         f"{arm3['fill']:.4f}", "**H200**, medians of 3, 39d016d"],
+        ["armadillo (100k triangles)", "100,000", seconds(h100["warp now"]["median"]), "",
+         seconds(h100_cpu["median"]), f"{h100['warp now']['fill']:.4f}", "medians of 3, 5c7e1fc"],
         ["unit cube", "100,000", *[seconds(median_of(cube, backend=b)) for b in ("warp", "numba-cuda", "numba")],
          f"{median_of(cube, 'fill', backend='warp'):.4f}", "medians of 2, 4ea141e"],
-        ["armadillo (100k triangles)", "1,000,000", seconds(arm3_1m["warp now"]["median"]), "", "",
-         f"{arm3_1m['warp now']['fill']:.4f}", "**H200**, median of 2, 39d016d"],
+        ["armadillo (100k triangles)", "1,000,000", seconds(h100_1m["warp now"]["median"]), "", "",
+         f"{h100_1m['warp now']['fill']:.4f}", "median of 2, 5c7e1fc"],
         ["unit cube", "1,000,000", seconds(cube_1m["median"]), "", seconds(cube_1m_cpu["median"]),
          f"{cube_1m['fill']:.4f}", "median of 3 (numba: 1), b55d5e0"],
         ["unit square", "1,000,000", seconds(square_1m["median"]), "", seconds(square_1m_cpu["median"]),
@@ -380,8 +387,9 @@ def scale_h100() -> list[str]:
         "(a warm-up packing first). numba-cuda was not run on 3ffe337 or later (the image's NumPy 2.5 breaks it).",
         "",
         *table(head, rows),
-        f"Warp is {arm3_cpu['median'] / arm3['median']:.1f}x the host's 16 cores on the armadillo at 100,000 (H200), "
-        f"{cube_1m_cpu['median'] / cube_1m['median']:.1f}x on the cube and",
+        f"Warp is {h100_cpu['median'] / h100['warp now']['median']:.1f}x the host's 16 cores on the armadillo at "
+        "100,000, "
+        f"{cube_1m_cpu['median'] / cube_1m['median']:.1f}x on the cube and "
         f"{square_1m_cpu['median'] / square_1m['median']:.1f}x on the square at a million (goals: 5x; 1 s, 8 s, 5 s). "
         f"A GPU's fast mode fills at 10,000 spheres this fraction of the faithful mode's: {policy}.",
         "",
@@ -395,18 +403,24 @@ def scale_h100() -> list[str]:
         f"node); the host's round takes {gpu['host_over_cpu']:.1f}x its 2-core time. The final check finds overlaps in "
         "a grid's sorted rows (Numba), not k-d trees. Cells split finer (ratio 2.5, not 4) filled 0.5% more in 34 "
         "rounds, but took 2.72 s, not 2.07 s ([output](../bench/results/split_ratio_h100_issue48.txt)).",
-        f"**Cooperative walks** (H200): a block of 32 threads walks one prototype's mesh tree (worst query "
+        f"**Cooperative walks**: a block of 32 threads walks one prototype's mesh tree (worst query "
         f"{walk['serial_nodes_most']:,.0f} nodes, {walk['32: rounds_most']:.0f} rounds), in move launches of at most "
-        f"4,096 prototypes and the set-up's converge. Without, the armadillo took {seconds(arm3_off['median'])} at "
-        f"100,000 (device {seconds(arm3_off['device'])}, with {seconds(arm3['device'])}; without in the set-up "
-        f"{seconds(converge_off['median'])}) and {seconds(arm3_1m['warp lanes-off']['median'])} at a million. The "
-        f"model's moves: {seconds(predicted4['moves'])} predicted, {seconds(parts(arm3)[1])} measured; its set-up is "
-        "the constants' run's, before the cooperative set-up. A fresh machine's first packing of a mesh on "
+        "4,096 prototypes and the set-up's converge. Without, the H100 took "
+        f"{seconds(h100['warp lanes-off']['median'])} at 100,000 (device {seconds(h100['warp lanes-off']['device'])}, "
+        f"with {seconds(h100['warp now']['device'])}; "
+        f"without in the set-up {seconds(h100['warp converge-off']['median'])}) and "
+        f"{seconds(h100_1m['warp lanes-off']['median'])} at a million (no gain there). An H200 took "
+        f"{seconds(arm3['median'])} at 100,000 (without {seconds(arm3_off['median'])}; without in the set-up "
+        f"{seconds(converge_off['median'])}; numba on its host {seconds(arm3_cpu['median'])}) and "
+        f"{seconds(arm3_1m['warp now']['median'])} at a million (without "
+        f"{seconds(arm3_1m['warp lanes-off']['median'])}). "
+        f"The model's moves (H200): {seconds(predicted4['moves'])} predicted, {seconds(parts(arm3)[1])} measured; its "
+        "set-up is the constants' run's, before the cooperative set-up. A fresh machine's first packing of a mesh on "
         f"Warp, caches empty, took {optimised['default']['first_packing_s']:.0f} s at Warp's default optimisation "
-        f"(the notices said 15, 30, 12 s), {optimised['O2']['first_packing_s']:.1f} s at level 2, ndpack's now "
+        f"(the notices said 15, 30, 12 s), {optimised['O2']['first_packing_s']:.1f} s at level 2 "
         f"(H100; packing {optimised['default']['median_s']:.2f} and {optimised['O2']['median_s']:.2f} s); with the "
-        f"cooperative module to compile too, {first_h200:.1f} s on the H200 "
-        "([output](../bench/results/compile_h200_issue48_step4.txt)).",
+        f"cooperative module to compile too, {cold['h100']:.1f} s (H100) and {cold['h200']:.1f} s (H200) "
+        "([output](../bench/results/compile_h100_issue48_step4.txt)).",
         *sources("profile_kernels_h100_armadillo_issue48_step2.json",
                  "profile_kernels_h100host_numba_armadillo_issue48_step2.json",
                  "million_h100_cube_issue48_step2.json", "million_h100_armadillo_issue48_step2.json",
@@ -415,7 +429,9 @@ def scale_h100() -> list[str]:
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
                  "work_model_2core_armadillo_100k_issue48_before.json",
                  "work_model_2core_armadillo_100k_issue48_step2.json", "policy_fill_2core_10k.json",
-                 "compile_options_h100_issue48.json", "profile_kernels_h200_armadillo_issue48_step4.json",
+                 "compile_options_h100_issue48.json", "profile_kernels_h100_armadillo_issue48_step4.json",
+                 "profile_kernels_h100host_numba_armadillo_issue48_step4.json",
+                 "million_h100_armadillo_issue48_step4.json", "profile_kernels_h200_armadillo_issue48_step4.json",
                  "profile_kernels_h200host_numba_armadillo_issue48_step4.json",
                  "million_h200_armadillo_issue48_step4.json", "profile_kernels_h200_armadillo_issue48_step3.json",
                  "cooperative_walk_2core_armadillo.json", "work_model_2core_armadillo_100k_issue48_step3.json",
