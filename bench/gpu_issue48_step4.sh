@@ -10,15 +10,17 @@
 #        lanes-off (2 runs each)
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step4.sh share     the armadillo at 100,000, the lanes
 #        agreeing on the best distance every 1, 4 and 16 rounds (4 runs each: the first compiles)
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step4.sh where     the first packing and each module's cold
+#        compile time, and the armadillo at 1,000,000 with every launch timed
 set -uo pipefail
 source bench/gpu_header.sh
 [ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
 CARD=$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1 | grep -o 'H[0-9][0-9]*' | head -1 | tr H h)  # h100, h200
-case "${1:-}" in
-  lanes)
-    (export NDPACK_CACHE=/tmp/ndpack-cold-cache WARP_CACHE_PATH=/tmp/ndpack-cold-cache/warp CUDA_CACHE_DISABLE=1
-     rm -rf /tmp/ndpack-cold-cache
-     python3 - <<'PY' 2>&1 | grep -v "^Warp\|^Module" | tee "$OUT/compile_${CARD}_issue48_step4.txt"
+# A fresh machine's first packing of the armadillo: ndpack's, Warp's and the driver's caches off.
+cold_first_packing() {
+  (export NDPACK_CACHE=/tmp/ndpack-cold-cache WARP_CACHE_PATH=/tmp/ndpack-cold-cache/warp CUDA_CACHE_DISABLE=1
+   rm -rf /tmp/ndpack-cold-cache
+   python3 - <<'PY' 2>&1 | grep -v "^Warp\|^Module" | tee "$OUT/compile_${CARD}_issue48_step4.txt"
 import time
 import ndpack as nd
 shape = nd.TriangleMesh.load("/tmp/armadillo.obj")
@@ -29,7 +31,11 @@ started = time.perf_counter()
 nd.pack(shape, 3, backend="warp", mode="fast", progress=False)
 print(f"warp, cuda: first packing of a mesh, cache empty: {first:.1f} s; the next: {time.perf_counter() - started:.2f} s")
 PY
-    )
+  )
+}
+case "${1:-}" in
+  lanes)
+    cold_first_packing
     export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
     timeout 420 python3 bench/profile_kernels.py --backends warp --mesh /tmp/armadillo.obj --count 100000 \
       --repeats 3 --stages --variants now lanes-off converge-off lanes-8192 \
@@ -50,5 +56,15 @@ PY
       --repeats 4 --stages --variants share-1 share-4 share-16 \
       --out "$OUT/share_${CARD}_armadillo_issue48_step4.json" 2>&1 | grep -v "^Warp\|^Module" | grep "==\|move_ids\|against"
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step4.sh lanes|million|share" >&2; exit 2 ;;
+  where)
+    # Each module's cold compile time, as the notices will quote it next time (the cold cache's
+    # compile-times.json), and where a million's time goes (every launch timed, once).
+    cold_first_packing
+    tee "$OUT/compile_times_${CARD}_issue48_step4.json" < /tmp/ndpack-cold-cache/compile-times.json
+    export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
+    timeout 300 python3 bench/profile_kernels.py --backends warp --mesh /tmp/armadillo.obj --count 1000000 \
+      --repeats 1 --stages --out "$OUT/profile_kernels_${CARD}_armadillo_1m_issue48_step4.json" 2>&1 \
+      | grep -v "^Warp\|^Module" | tail -40
+    ;;
+  *) echo "usage: bash bench/gpu_issue48_step4.sh lanes|million|share|where" >&2; exit 2 ;;
 esac

@@ -60,7 +60,7 @@ def test_cooperative_walk_finds_the_serial_nearest(cpu_blocks, capacity, share, 
     program = flat.program
     assert has_walk(program.source("warp", "float64"))
     module = warp_module(program, "float64", nearest_lanes(capacity, share) + TEST_KERNEL, "cpu", block_dim=lanes,
-                         what=f" (test of {lanes} lanes, stack {capacity}, sharing every {share})")
+                         what=" (a test of cooperative walks)")
     prm = wp.array(flat.params, dtype=wp.float64, device="cpu")
     o = int(flat.params[1])
     rng = np.random.default_rng(7)
