@@ -6,7 +6,10 @@ and written, with the kernels of :mod:`ndpack.backends.warp_kernels`, into one g
 shape of built-ins, and keeps the binary. A shape is its numbers, copied to the device once. The inserted spheres
 live on the device (:class:`~ndpack.backends.device_spheres.DeviceSpheres`), and during a
 packing so do the prototypes (:class:`~ndpack.backends.prototypes.DevicePrototypes`, through
-:class:`_WarpDevice`).
+:class:`_WarpDevice`). On a GPU, a launch that moves few prototypes in a mesh (or outline) gives
+each a block of 32 threads that walk its tree together, from a second module
+(:mod:`ndpack.backends.warp_lanes`; the backend's ``cooperative_most`` and
+``cooperative_converge_most``, 0 for never).
 
 Precision: float64 by default. ``precision="float32"`` runs the kernels in float32 (faster on
 GPUs without full float64 rate); clearances are then accurate to about 1e-7 of the shape's size,
