@@ -10,8 +10,8 @@ points near the medial axis, where the walks are longest. For each, the serial w
 pushed nearer last; the best distance is shared at the end of each round) for 8 to 64 lanes, with
 the limit a converge step has (the last step's element: the distance itself, widened by 1e-6) and
 with none (a prototype's first evaluation). A GPU thread's chain is about its nodes; a block's,
-its rounds (each costs a few shared-memory synchronisations more than a node). Both walks are
-re-implemented here in plain Numba over the same parameter block, and must agree on the distance.
+its rounds (each costs a few shared-memory synchronisations more than a node). The walks are
+:data:`WALK`, compiled with the mesh program's own functions; all must agree on the distance.
 """
 
 from __future__ import annotations
@@ -20,7 +20,6 @@ import argparse
 import sys
 from pathlib import Path
 
-import numba
 import numpy as np
 
 import ndpack as nd
@@ -30,116 +29,75 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import machine_info, write_json
 
 LANES = (8, 16, 32, 64)
+#: The emulated stack's room (the GPU's holds 1,024 and then walks alone; the deepest seen is 542).
+STACK = 8192
 
-
-@numba.njit(cache=True)
-def _triangle_squared(q, prm, t):
-    """Squared distance from q to the triangle at t (Ericson's regions)."""
-    a, b, c = prm[t:t + 3], prm[t + 3:t + 6], prm[t + 6:t + 9]
-    ab, ac, ap = b - a, c - a, q - a
-    d1, d2 = ab @ ap, ac @ ap
-    if d1 <= 0 and d2 <= 0:
-        return ap @ ap
-    bp = q - b
-    d3, d4 = ab @ bp, ac @ bp
-    if d3 >= 0 and d4 <= d3:
-        return bp @ bp
-    vc = d1 * d4 - d3 * d2
-    if vc <= 0 and d1 >= 0 and d3 <= 0:
-        r = ap - d1 / (d1 - d3) * ab
-        return r @ r
-    cp = q - c
-    d5, d6 = ab @ cp, ac @ cp
-    if d6 >= 0 and d5 <= d6:
-        return cp @ cp
-    vb = d5 * d2 - d1 * d6
-    if vb <= 0 and d2 >= 0 and d6 <= 0:
-        r = ap - d2 / (d2 - d6) * ac
-        return r @ r
-    va = d3 * d6 - d5 * d4
-    if va <= 0 and d4 - d3 >= 0 and d5 - d6 >= 0:
-        r = bp - (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b)
-        return r @ r
-    den = 1.0 / (va + vb + vc)
-    r = ap - ab * (vb * den) - ac * (vc * den)
-    return r @ r
-
-
-@numba.njit(cache=True)
-def _box_squared(q, prm, b):
-    s = 0.0
-    for i in range(3):
-        t = max(prm[b + i] - q[i], q[i] - prm[b + 3 + i], 0.0)
-        s += t * t
-    return s
-
-
-@numba.njit(cache=True)
-def _expand(q, prm, o, node, best, out):
-    """Test ``node`` against ``best``: out = (best, found, far child, near child), -1 where none."""
-    nodes, elements, stride = int(prm[o + 7]), int(prm[o + 8]), int(prm[o + 10])
-    b = nodes + 8 * node
-    out[0], out[1], out[2], out[3] = best, -1.0, -1.0, -1.0
-    if _box_squared(q, prm, b) >= best:
-        return
-    if int(prm[b + 7]) > 0:
-        start = int(prm[b + 6])
-        for k in range(start, start + int(prm[b + 7])):
-            d = _triangle_squared(q, prm, elements + stride * k)
-            if d < out[0]:
-                out[0], out[1] = d, k
-        return
-    left, right = node + 1, int(prm[b + 6])
-    near_left, near_right = _box_squared(q, prm, nodes + 8 * left), _box_squared(q, prm, nodes + 8 * right)
-    first, second = (right, left) if near_left <= near_right else (left, right)
-    near_first, near_second = (near_right, near_left) if near_left <= near_right else (near_left, near_right)
-    if near_first < best:
-        out[2] = first
-    if near_second < best:
-        out[3] = second
-
-
-@numba.njit(cache=True)
-def serial(q, prm, o, limit):
-    """(best squared distance, nodes visited) of the serial walk."""
-    best, visited, top = limit, 0, 1
-    pending = np.zeros(256, np.int64)
-    out = np.zeros(4)
-    while top > 0:
-        top -= 1
-        visited += 1
-        _expand(q, prm, o, pending[top], best, out)
-        best = out[0]
-        for slot in (2, 3):
-            if out[slot] >= 0:
-                pending[top] = int(out[slot])
-                top += 1
-    return best, visited
-
-
-@numba.njit(cache=True)
-def cooperative(q, prm, o, limit, lanes):
-    """(best squared distance, rounds, deepest stack) of the walk of ``lanes`` lanes."""
-    best, rounds, deepest, top = limit, 0, 1, 1
-    pending = np.zeros(1 << 16, np.int64)
-    children = np.zeros((lanes, 2), np.int64)
-    out = np.zeros(4)
+#: The walk of ndpack.backends.warp_lanes with ``lanes`` lanes, in Numba's dialect of a mesh
+#: program's functions (its own ``box_squared_distance`` and ``element_query``): each round the
+#: lanes pop up to one node each, test it against the best distance as the round began, push the
+#: far children, then the near ones (which so pop first), and share the best. Returns (the best
+#: squared distance, rounds, the deepest stack). With one lane a round is a node of the serial
+#: walk, ``nearest_element``'s. ``bench/work_model.py`` counts the GPU's rounds with it too.
+WALK = f"""
+def lanes_walk(q, prm, o, limit, lanes):
+    nodes = int(prm[o + 7])
+    elements = int(prm[o + 8])
+    stride = int(prm[o + 10])
+    size = 2 * D + 2
+    pending = np.empty({STACK}, np.int64)
+    children = np.empty((lanes, 2), np.int64)
+    pending[0] = 0
+    top = 1
+    best = limit
+    rounds = 0
+    deepest = 1
     while top > 0:
         rounds += 1
         popped = min(lanes, top)
         shared = best
         for j in range(popped):
-            _expand(q, prm, o, pending[top - 1 - j], shared, out)
-            best = min(best, out[0])
-            children[j, 0], children[j, 1] = out[2], out[3]
+            node = pending[top - 1 - j]
+            children[j, 0] = -1
+            children[j, 1] = -1
+            b = nodes + size * node
+            if box_squared_distance(q, prm, b) < shared:
+                count = int(prm[b + 2 * D + 1])
+                if count > 0:
+                    start = int(prm[b + 2 * D])
+                    for k in range(start, start + count):
+                        best = min(best, element_query(q, prm, elements + stride * k, 0))
+                else:
+                    left = node + 1
+                    right = int(prm[b + 2 * D])
+                    near_left = box_squared_distance(q, prm, nodes + size * left)
+                    near_right = box_squared_distance(q, prm, nodes + size * right)
+                    if near_left <= near_right:
+                        far, near, far_d, near_d = right, left, near_right, near_left
+                    else:
+                        far, near, far_d, near_d = left, right, near_left, near_right
+                    if far_d < shared:
+                        children[j, 0] = far
+                    if near_d < shared:
+                        children[j, 1] = near
         top -= popped
-        for slot in range(2):  # the far children first, then the near: near ones pop first
+        for slot in range(2):
             for j in range(popped):
                 if children[j, slot] >= 0:
+                    if top == {STACK}:
+                        raise ValueError("the emulated walk's stack is full: raise STACK")
                     pending[top] = children[j, slot]
                     top += 1
         deepest = max(deepest, top)
-    return best, rounds, deepest
+    return best, float(rounds), float(deepest)
+"""
+
+
+def walk_of(program):
+    """``lanes_walk`` (:data:`WALK`) compiled with a mesh ``program``'s functions, by Numba."""
+    from ndpack.backends import numba_common
+    from ndpack.kernels import compile as kernel_compile
+
+    return kernel_compile.numba_namespace(program, "cpu", WALK, numba_common._jit)["lanes_walk"]
 
 
 def main():
@@ -149,7 +107,9 @@ def main():
     parser.add_argument("--out", default=None)
     args = parser.parse_args()
     shape = nd.TriangleMesh.load(args.mesh)
-    prm = np.asarray(compiled_program(shape).params, dtype=np.float64)
+    flat = compiled_program(shape)
+    walk = walk_of(flat.program)
+    prm = np.asarray(flat.params, dtype=np.float64)
     o = int(prm[1])
     if o < 0 or prm.size <= o + 10:
         raise SystemExit(f"{args.mesh} is not one mesh")
@@ -160,12 +120,12 @@ def main():
         rows = []
         for x in points:
             q = (x - centre) / scale
-            exact, _ = serial(q, prm, o, 1e30)
+            exact = walk(q, prm, o, 1e30, 1)[0]
             limit = exact * 1.000001 + 1e-30 if limit_name != "none" else 1e30
-            found, nodes = serial(q, prm, o, limit)
+            found, nodes, _ = walk(q, prm, o, limit, 1)  # one lane: the serial walk
             row = [nodes]
             for lanes in LANES:
-                shared, rounds, deepest = cooperative(q, prm, o, limit, lanes)
+                shared, rounds, deepest = walk(q, prm, o, limit, lanes)
                 if shared != found:
                     raise AssertionError(f"the walks disagree at {x}: {shared} against {found}")
                 row += [rounds, deepest]

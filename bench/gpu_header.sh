@@ -6,3 +6,25 @@ export PYTHONUNBUFFERED=1
 nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader | tee "$OUT/gpu.txt"
 echo "cores: $(nproc)" | tee -a "$OUT/gpu.txt"
 python3 -c "import numba, numba_cuda, warp, numpy; print('numba', numba.__version__, 'numba-cuda', numba_cuda.__version__, 'warp', warp.__version__, 'numpy', numpy.__version__)" 2>&1 | grep -v "^Warp" | tee -a "$OUT/gpu.txt"
+# The card, for file names: h100 or h200.
+CARD=$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1 | grep -o 'H[0-9][0-9]*' | head -1 | tr H h)
+
+# cold_first_packing FILE: a fresh machine's first packing of /tmp/armadillo.obj on Warp, and the next,
+# with ndpack's, Warp's and the driver's caches off; the notices and the times go to FILE, and each
+# module's compile time to /tmp/ndpack-cold-cache/compile-times.json.
+cold_first_packing() {
+  (export NDPACK_CACHE=/tmp/ndpack-cold-cache WARP_CACHE_PATH=/tmp/ndpack-cold-cache/warp CUDA_CACHE_DISABLE=1
+   rm -rf /tmp/ndpack-cold-cache
+   python3 - <<'PY' 2>&1 | grep -v "^Warp\|^Module" | tee "$1"
+import time
+import ndpack as nd
+shape = nd.TriangleMesh.load("/tmp/armadillo.obj")
+started = time.perf_counter()
+nd.pack(shape, 3, backend="warp", mode="fast", progress=False)
+first = time.perf_counter() - started
+started = time.perf_counter()
+nd.pack(shape, 3, backend="warp", mode="fast", progress=False)
+print(f"warp, cuda: first packing of a mesh, cache empty: {first:.1f} s; the next: {time.perf_counter() - started:.2f} s")
+PY
+  )
+}

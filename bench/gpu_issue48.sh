@@ -10,7 +10,6 @@ set -uo pipefail
 source bench/gpu_header.sh
 [ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
 export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
-CARD=$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1 | grep -o 'H[0-9][0-9]*' | head -1 | tr H h)  # h100 or h200
 if [ "${1:-}" = small ]; then
   MESH=tests/data/meshes/armadillo-20k.ply NAME=armadillo20k
 else

@@ -13,23 +13,11 @@
 set -uo pipefail
 source bench/gpu_header.sh
 [ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
-CARD=$(nvidia-smi --query-gpu=name --format=csv,noheader | head -1 | grep -o 'H[0-9][0-9]*' | head -1 | tr H h)  # h100, h200
 case "${1:-}" in
   compile)
-    # A cache of its own, empty: what a fresh machine's first packing of a mesh compiles and waits.
-    export NDPACK_CACHE=/tmp/ndpack-cold-cache WARP_CACHE_PATH=/tmp/ndpack-cold-cache/warp
-    rm -rf /tmp/ndpack-cold-cache
-    python3 - <<'PY' 2>&1 | grep -v "^Warp\|^Module" | tee "$OUT/compile_${CARD}_issue48.txt"
-import time
-import ndpack as nd
-shape = nd.TriangleMesh.load("/tmp/armadillo.obj")
-started = time.perf_counter()
-nd.pack(shape, 3, backend="warp", mode="fast", progress=False)
-first = time.perf_counter() - started
-started = time.perf_counter()
-nd.pack(shape, 3, backend="warp", mode="fast", progress=False)
-print(f"warp, cuda: first packing of a mesh, cache empty: {first:.1f} s; the next: {time.perf_counter() - started:.2f} s")
-PY
+    # A fresh machine's first packing of a mesh (since the cooperative walks' step, with the driver's
+    # cache off too: bench/gpu_header.sh).
+    cold_first_packing "$OUT/compile_${CARD}_issue48.txt"
     ;;
   armadillo)
     export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp

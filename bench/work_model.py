@@ -58,6 +58,7 @@ from ndpack.backends.prototypes import SPREAD_MAX
 from ndpack.backends.warp_lanes import CONVERGE_MOST, COOPERATIVE_MOST, LANES
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import cooperative_walk
 from _common import machine_info, write_json
 from profile_kernels import install_stages, launch_kind
 
@@ -65,57 +66,6 @@ from profile_kernels import install_stages, launch_kind
 #: rounds counters, then three per prototype of a converge launch.
 COUNTERS = 3
 
-#: The rounds of the cooperative walk (ndpack.backends.warp_lanes) of a nearest-element query, in
-#: Numba: the same pops, tests and pushes, one node a lane a round; counted beside the serial walk,
-#: which gives the answer.
-LANES_ROUNDS = """
-def lanes_rounds(q, prm, o, limit):
-    nodes = int(prm[o + 7])
-    elements = int(prm[o + 8])
-    stride = int(prm[o + 10])
-    size = 2 * D + 2
-    pending = np.empty(4096, np.int64)
-    children = np.empty((LANES, 2), np.int64)
-    pending[0] = 0
-    top = 1
-    best = limit
-    rounds = 0
-    while top > 0:
-        rounds += 1
-        popped = min(LANES, top)
-        shared = best
-        for j in range(popped):
-            node = pending[top - 1 - j]
-            children[j, 0] = -1
-            children[j, 1] = -1
-            b = nodes + size * node
-            if box_squared_distance(q, prm, b) < shared:
-                count = int(prm[b + 2 * D + 1])
-                if count > 0:
-                    start = int(prm[b + 2 * D])
-                    for k in range(start, start + count):
-                        best = min(best, element_query(q, prm, elements + stride * k, 0))
-                else:
-                    left = node + 1
-                    right = int(prm[b + 2 * D])
-                    near_left = box_squared_distance(q, prm, nodes + size * left)
-                    near_right = box_squared_distance(q, prm, nodes + size * right)
-                    if near_left <= near_right:
-                        far, near, far_d, near_d = right, left, near_right, near_left
-                    else:
-                        far, near, far_d, near_d = left, right, near_left, near_right
-                    if far_d < shared:
-                        children[j, 0] = far
-                    if near_d < shared:
-                        children[j, 1] = near
-        top -= popped
-        for slot in range(2):
-            for j in range(popped):
-                if children[j, slot] >= 0 and top < 4096:
-                    pending[top] = children[j, slot]
-                    top += 1
-    return float(rounds)
-""".replace("LANES", str(LANES))
 
 
 # ------------------------------------------------------------------------------------ launches
@@ -205,7 +155,7 @@ def counting_nodes(text: str) -> str:
     assert nodes in text, "nearest_element's walk is not where this script expects it"
     start = "def nearest_element(q, prm, o, limit):\n"
     assert start in text, "nearest_element is not where this script expects it"
-    text = text.replace(start, start + "    prm[prm.shape[0] - 3] += lanes_rounds(q, prm, o, limit)\n")
+    text = text.replace(start, start + f"    prm[prm.shape[0] - 3] += lanes_walk(q, prm, o, limit, {LANES})[1]\n")
     return text.replace(nodes, nodes + "        prm[prm.shape[0] - 1] += 1.0\n")
 
 
@@ -218,7 +168,7 @@ def counting_prototypes(text: str) -> str:
     call = ("        converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, "
             "out_points,\n                     out_clearance)\n")
     assert call in text, "converge_all is not where this script expects it"
-    return LANES_ROUNDS + text.replace(call, (
+    return cooperative_walk.WALK + text.replace(call, (
         "        nodes = prm[prm.shape[0] - 1]\n"
         "        evaluations = prm[prm.shape[0] - 2]\n"
         "        rounds = prm[prm.shape[0] - 3]\n" + call +

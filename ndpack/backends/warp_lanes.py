@@ -37,12 +37,9 @@ CHAIN = ("surface_feature", "sd_feature", "nearest_obstacle", "free_space", "con
 #: The armadillo's deepest stack at 32 lanes was 310 (no limit) and 121 (the last step's element).
 STACK_CAPACITY = 1024
 #: The lanes agree on the best distance every this many rounds; in between each prunes by its own
-#: (and the limit). A converge step's limit is the last step's element, as tight as the answer:
-#: sharing then changes nothing (bench/cooperative_walk.py: 16.0 rounds on the mean, 47 at most,
-#: sharing every round or never); a first query, with no limit, takes 26.1 rounds sharing every
-#: round, 27.6 every 4, 36.3 never. Nor is agreeing what a round costs: the move launches took
-#: 0.524, 0.522 and 0.516 s sharing every 1, 4 and 16 rounds (H200, armadillo at 100,000;
-#: bench/gpu_issue48_step4.sh share), so the lanes agree every round.
+#: (and the limit). Agreeing is not what a round costs: the move launches took 0.524, 0.522 and
+#: 0.516 s sharing every 1, 4 and 16 rounds (H200, armadillo at 100,000; bench/gpu_issue48_step4.sh
+#: share), so the lanes agree every round, which prunes most.
 SHARE_EVERY = 1
 #: Suffix of the copies.
 SUFFIX = "_lanes"
@@ -50,7 +47,7 @@ SUFFIX = "_lanes"
 #: (Warp compiles a module once per block size it is launched with).
 LANES = 32
 #: On a GPU, a move launch of at most this many prototypes is cooperative: 4,096 blocks of 32
-#: stay resident together on an H100 (32 blocks on each of 132 SMs). The device's time at 100,000
+#: stay resident together on an H100 (its limits: 32 blocks on each of 132 SMs). The device's time at 100,000
 #: spheres of the armadillo on an H200 (bench/gpu_issue48_step3.sh lanes), with moves of at most
 #: 1,024, 4,096, 8,192 and 16,384 prototypes cooperative: 0.93, 0.80, 0.88 and 0.88 s; never 1.28 s.
 COOPERATIVE_MOST = 4096
