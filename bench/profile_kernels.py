@@ -1,7 +1,7 @@
 """Where a fast-mode packing's time goes, by device kernel and by driver phase.
 
     python bench/profile_kernels.py --backends warp numba-cuda --count 100000 [--mesh armadillo.obj]
-        [--variants now no-ahead] [--repeats 2] [--host-profile] [--stages]
+        [--variants now no-ahead] [--repeats 2] [--host-profile] [--stages] [--spheres now.npz]
 
 Every kernel launch of the device store is made synchronous and timed (so its time is the
 device's, launch included; copies queued before it are waited for first, and not counted).
@@ -211,6 +211,9 @@ def main():
     parser.add_argument("--no-profiled", action="store_true",
                         help="only the unprofiled runs (--repeats of them): no run with every launch timed")
     parser.add_argument("--out", default=None, help="write the tables as JSON here")
+    parser.add_argument("--spheres", default=None,
+                        help="save the first variant's last unprofiled packing here (.npz: centers, radii), "
+                             "to set beside another checkout's")
     args = parser.parse_args()
     dim = 2 if args.square else 3
     shape = nd.TriangleMesh.load(args.mesh) if args.mesh else nd.Box(np.zeros(dim), np.ones(dim))
@@ -257,6 +260,8 @@ def main():
                 same = dict(spheres_first=len(first_radii), most_radius_change=float(
                     np.abs(radii - first_radii).max()) if len(radii) == len(first_radii) else None)
                 print(f"   {name} {variant} against {args.variants[0]}: {same}", flush=True)
+                if args.spheres and variant == args.variants[0]:
+                    np.savez(args.spheres, centers=last.centers, radii=last.radii)
             if args.no_profiled:
                 results[key] = dict(spheres=len(last.radii), rounds=len(last.stats.time), fill=last.fill, **same,
                                     unprofiled=timed, median=statistics.median(timed),

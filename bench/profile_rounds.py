@@ -1,10 +1,12 @@
 """Where a round's time goes: cProfile of one packing per backend, top functions by own time.
 
     python bench/profile_rounds.py --backends warp numba-cuda --count 3000
+    python bench/profile_rounds.py --backends warp --mode fast --count 1000000 --mesh armadillo.obj --out host.txt
 
-Compiles first (a 3-sphere packing), then profiles the packing alone. Prints rounds per second
-and the functions that take the most time themselves; on a GPU, time spent waiting for the device
-shows up in the synchronising calls (fetch). ``--kernels`` instead times each device-store call
+Compiles first (a 3-sphere packing), then profiles the packing alone. Prints rounds per second,
+the functions that take the most time themselves, and ndpack's functions by the time spent in
+them and what they call (where the host's round goes); on a GPU, time spent waiting for the
+device shows up in the synchronising calls (fetch). ``--kernels`` instead times each device-store call
 (kernel launches synchronised one by one, uploads, fetches) on the GPU backends: slower overall,
 but it says which kernel costs what.
 """
@@ -29,8 +31,12 @@ def main():
     parser.add_argument("--batch", type=int, default=1)
     parser.add_argument("--top", type=int, default=18)
     parser.add_argument("--kernels", action="store_true", help="time each device call (GPU backends)")
+    parser.add_argument("--mode", default="faithful", choices=["faithful", "fast"])
+    parser.add_argument("--mesh", default=None, help="a mesh file; default the unit cube")
+    parser.add_argument("--out", default=None, help="also write the listings to this text file")
     args = parser.parse_args()
-    shape = nd.Box(np.zeros(3), np.ones(3))
+    shape = nd.TriangleMesh.load(args.mesh) if args.mesh else nd.Box(np.zeros(3), np.ones(3))
+    listings = []
     for backend in args.backends:
         nd.pack(shape, 3, backend=backend)
         if args.kernels:
@@ -39,15 +45,28 @@ def main():
         profile = cProfile.Profile()
         started = time.perf_counter()
         profile.enable()
-        packing = nd.pack(shape, args.count, backend=backend, batch=args.batch, mode="faithful")
+        packing = nd.pack(shape, args.count, backend=backend, batch=args.batch, mode=args.mode, progress=False)
         profile.disable()
         wall = time.perf_counter() - started
         rounds = len(packing.stats.time)
-        print(f"== {backend}: {len(packing.radii)} spheres, {rounds} rounds in {wall:.2f} s "
-              f"({1e3 * wall / rounds:.3f} ms a round, profiled)")
-        text = io.StringIO()
-        pstats.Stats(profile, stream=text).sort_stats("tottime").print_stats(args.top)
-        print("\n".join(line for line in text.getvalue().splitlines()[6:] if line.strip()))
+        listing = [f"== {backend}, {args.mode}: {len(packing.radii)} spheres, {rounds} rounds in {wall:.2f} s "
+                   f"({1e3 * wall / rounds:.3f} ms a round, profiled)", "-- by own time"]
+        listing += _listing(profile, "tottime", args.top)
+        listing += ["-- ndpack's functions, by time in them and their calls"]
+        listing += _listing(profile, "cumulative", 2 * args.top, "ndpack")
+        print("\n".join(listing))
+        listings += listing
+    if args.out:
+        with open(args.out, "w") as file:
+            file.write("\n".join(listings) + "\n")
+
+
+def _listing(profile, key, top, only=None):
+    """Lines of a cProfile listing sorted by ``key``, its ``top`` rows (of the paths holding ``only``)."""
+    text = io.StringIO()
+    stats = pstats.Stats(profile, stream=text).sort_stats(key)
+    stats.print_stats(*([only] if only else []), top)
+    return [line for line in text.getvalue().splitlines()[6:] if line.strip()]
 
 
 def time_device_calls(shape, backend, count, batch):

@@ -178,6 +178,42 @@ def gather_ids(ids, points, clearance, out_points, out_clearance):
         out_clearance[b] = clearance[i]
 
 
+def gather_rows(ids, points, polished, out_points, out_flags):
+    b = cuda.grid(1)
+    if b < ids.shape[0]:
+        i = ids[b]
+        for k in range(D):
+            out_points[b, k] = points[i, k]
+        out_flags[b] = polished[i]
+
+
+def index_clear(heads, level_head, level_count, level_rmax):
+    i = cuda.grid(1)
+    if i < heads.shape[0]:
+        heads[i] = -1
+    if i < level_head.shape[0]:
+        level_head[i] = -1
+        level_count[i] = 0
+        level_rmax[i] = 0.0
+
+
+def index_insert_range(start, centers, radii, origin, top, heads, nxt, level_of, level_head, level_next, level_count,
+                       level_rmax):
+    # index_insert with atomics: the lists' order follows them, which no query depends on.
+    s = start + cuda.grid(1)
+    if s < radii.shape[0]:
+        level = index_level(radii[s], top, level_head.shape[0])
+        side = top * 0.5 ** level
+        cell = point()
+        for k in range(D):
+            cell[k] = math.floor((centers[s, k] - origin[k]) / side)
+        nxt[s] = cuda.atomic.exch(heads, index_bucket(level, cell, heads.shape[0] - 1), s)
+        level_of[s] = level
+        level_next[s] = cuda.atomic.exch(level_head, level, s)
+        cuda.atomic.add(level_count, level, 1)
+        cuda.atomic.max(level_rmax, level, radii[s])
+
+
 def index_bound_ids(ids, lower, upper, reach, centers, radii, origin, top, heads, nxt, level_of, level_head,
                     level_next, level_count, level_rmax, scratch, bound, spread):
     t = cuda.grid(1)
@@ -228,7 +264,7 @@ def move_ids(ids, first, first_rows, tries, stream, points, clearance, polished,
 ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
                "select_all", "max_all", "touched_index_select", "gather_ids", "index_bound_ids", "index_fill_ids",
                "near_finish", "move_ids", "set_floats", "lower_floats", "split_mark",
-               "split_apply")
+               "split_apply", "gather_rows", "index_clear", "index_insert_range")
 THREADS_PER_BLOCK = 128
 
 

@@ -11,7 +11,8 @@ the box, not by the packing's size.
 
 Buckets are singly linked lists threaded through the sphere ids (``heads`` per bucket, ``next``
 per sphere), so inserting a sphere is O(1) and spheres are never moved. The kernels are the
-per-point functions ``index_*`` in :mod:`ndpack.backends.numba_kernels`.
+per-point functions ``index_*`` in :mod:`ndpack.backends.numba_kernels`. The host builds the
+index of the CPU backends (:class:`SphereIndex`); a GPU builds its own (:class:`DeviceIndex`).
 
 SciPy's k-d tree answers the same questions, but it cannot be called from inside a Numba (or
 CUDA) kernel, where the queries run next to the prototype's work, and it cannot grow: a rebuild
@@ -22,8 +23,6 @@ hundred rounds a million-sphere packing takes.
 from __future__ import annotations
 
 import numpy as np
-
-from .numba_common import geometry_kernels
 
 #: Octaves of radius the index tells apart: from ``top`` down to ``top / 2**47``.
 LEVELS = 48
@@ -102,47 +101,69 @@ class SphereIndex:
         return self.arrays
 
 
-#: Device kinds of the index arrays (see ``Prototypes``' device adapters), in :attr:`SphereIndex.arrays`
-#: order; None for the scalar ``top``.
-_KINDS = ("float", None, "index", "index", "index", "index", "index", "index", "float")
-#: Positions of the tables a sync rewrites whole (bucket heads and the per-level ones), and of
-#: the per-sphere ones of which only the new spheres' rows change.
-_WHOLE, _ROWS = (2, 5, 7, 8), (3, 4, 6)
-
-
 class DeviceIndex:
-    """A :class:`SphereIndex` built on the host and mirrored on a GPU, for the device kernels'
-    queries (``index_near``).
+    """A :class:`SphereIndex` built and kept on a GPU, for the device kernels' queries
+    (``index_near``) over spheres already on the device.
 
-    Inserting is serial and O(1) a sphere, so the host does it; a sync then copies up only what
-    changed since the last one: the new spheres' rows, the bucket heads and the level tables.
+    The device inserts the new spheres of each sync in one launch (``index_insert_range``,
+    through atomics), so nothing but the launch crosses from the host: a host-built index cost a
+    serial insert a sphere and a copy of every bucket head a sync (32 MB at a million spheres,
+    several times a round; 1.3 s of a million-sphere packing of the armadillo on an H200, issue
+    48). The lists' order then follows the atomics: no query depends on it (a query's answers are
+    sets, its nearest sphere the lowest id among equals).
 
     Parameters
     ----------
     dim : int
     device : object
-        The store's device adapter: ``upload(host, kind)`` and ``write(array, start, host, kind)``.
+        The store's device adapter: ``upload(host, kind)``, ``empty(shape, kind)`` and
+        ``launch(kernel_name, threads, *args)`` with the kernels ``index_clear`` and
+        ``index_insert_range``.
     """
 
     def __init__(self, dim: int, device):
-        self.host = SphereIndex(geometry_kernels(dim)["index_insert_range"])
-        self.device = device
-        self.arrays = None
-        self._mirrored, self._count = None, 0
+        self.dim, self.device = dim, device
+        self.arrays = None  # device arrays in SphereIndex.arrays order (``top`` a float)
+        self.count = self.capacity = self.buckets = 0
+        self.first = self.last = None
+        self.buffer = None  # the owner of the host arrays indexed (see owner())
 
-    def sync(self, centers: np.ndarray, radii: np.ndarray) -> list:
-        """The device copies of the index of ``centers`` (m, d) and ``radii`` (m,), in
-        :attr:`SphereIndex.arrays` order (``top`` stays a float)."""
-        arrays = self.host.sync(centers, radii)
-        count = self.host.count
-        if arrays is not self._mirrored:  # a new index (first use, or grown past its capacity)
-            self.arrays = [value if kind is None else self.device.upload(value, kind)
-                           for value, kind in zip(arrays, _KINDS)]
-        elif count > self._count:
-            for position in _WHOLE:
-                self.device.write(self.arrays[position], 0, arrays[position], _KINDS[position])
-            for position in _ROWS:
-                self.device.write(self.arrays[position], self._count, arrays[position][self._count : count],
-                                  _KINDS[position])
-        self._mirrored, self._count = arrays, count
+    def sync(self, centers: np.ndarray, radii: np.ndarray, d_centers, d_radii) -> list:
+        """The device arrays of the index of ``centers`` (m, d) and ``radii`` (m,) float64, whose
+        device copies are ``d_centers`` and ``d_radii`` (at least m rows); only new rows are
+        inserted when the arrays extend the ones indexed before (:func:`extends`)."""
+        count = len(radii)
+        same_prefix = self.arrays is not None and extends(centers, self.count, self.buffer, self.first, self.last)
+        self.buffer = owner(centers)
+        if not same_prefix or count > self.capacity:
+            self._reset(radii, max(64, 2 * count))
+        if count > self.count:
+            self.device.launch("index_insert_range", count - self.count, self.count, d_centers, d_radii,
+                               *self.arrays)
+            self.count = count
+            self.first, self.last = centers[0].copy(), centers[count - 1].copy()
         return self.arrays
+
+    def _reset(self, radii, capacity):
+        """An empty index for ``capacity`` spheres, its coarsest cells four times the largest of
+        ``radii`` (as :class:`SphereIndex`); the arrays are kept where they are large enough."""
+        buckets = 1 << int(np.ceil(np.log2(max(2 * capacity, 64))))
+        top = 4.0 * float(radii.max()) if len(radii) and radii.max() > 0 else 1.0
+        if self.arrays is None or capacity > self.capacity or buckets > self.buckets:
+            empty = self.device.empty
+            self.arrays = [
+                self.device.upload(np.zeros(self.dim), "float"),  # origin
+                top,
+                empty(buckets, "index"),   # heads
+                empty(capacity, "index"),  # next
+                empty(capacity, "index"),  # level_of
+                empty(LEVELS, "index"),    # level_head
+                empty(capacity, "index"),  # level_next
+                empty(LEVELS, "index"),    # level_count
+                empty(LEVELS, "float"),    # level_rmax
+            ]
+            self.capacity, self.buckets = capacity, buckets
+        self.arrays[1] = top
+        heads, level_head, level_count, level_rmax = (self.arrays[i] for i in (2, 5, 7, 8))
+        self.device.launch("index_clear", max(self.buckets, LEVELS), heads, level_head, level_count, level_rmax)
+        self.count = 0

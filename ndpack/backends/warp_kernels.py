@@ -259,15 +259,38 @@ def gather_ids(ids: wp.array(dtype=wp.int32), points: wp.array(dtype=VecD), clea
     out_clearance[b] = clearance[ids[b]]
 
 
-# ---------------------------------------------------------------------------- the sphere index
-# Queries of the index the host builds (ndpack.backends.sphere_index, and index_near of the Numba
-# kernels, which these follow): a hashed grid per octave of radius, each bucket a linked list.
+@wp.kernel
+def gather_rows(ids: wp.array(dtype=wp.int32), points: wp.array(dtype=VecD), polished: wp.array(dtype=wp.int32),
+                out_points: wp.array(dtype=VecD), out_flags: wp.array(dtype=wp.int32)):
+    """The points and polish flags of prototypes ``ids``, as a selection appends them."""
+    b = wp.tid()
+    out_points[b] = points[ids[b]]
+    out_flags[b] = polished[ids[b]]
 
-#: The index is built in float64 on the host. In float32 a query's cell ranges may round to a
-#: neighbouring cell, so they are widened by this many cells and a bucket's spheres are taken
-#: without checking their cell (extra spheres in a table are harmless, missing ones are not).
+
+# ---------------------------------------------------------------------------- the sphere index
+# The index of ndpack.backends.sphere_index (a hashed grid per octave of radius, each bucket a
+# linked list), built on the device (index_clear, index_insert_range) and queried there
+# (index_near); both follow the Numba kernels of the same names.
+
+#: In float32 a query's cell ranges may round to a neighbouring cell of the one a sphere was put
+#: in, so they are widened by this many cells and a bucket's spheres are taken without checking
+#: their cell (extra spheres in a table are harmless, missing ones are not).
 INDEX_SLACK = wp.constant(0.0 if F is wp.float64 else 1.0)
 INDEX_ROOT_D = wp.constant(float(D) ** 0.5)  # a margin on every axis, as one distance
+#: The Numba kernels' INDEX_FACTOR: a level holds spheres of a third to a sixth of its cells' side.
+INDEX_FACTOR = wp.constant(3.0)
+
+
+@wp.func
+def index_level(r: F, top: F, levels: int):
+    """The finest level whose cells are at least ``INDEX_FACTOR`` times ``r``."""
+    level = int(0)
+    side = top
+    while level < levels - 1 and F(0.5) * side >= F(INDEX_FACTOR) * r:
+        side = F(0.5) * side
+        level += 1
+    return level
 
 
 @wp.func
@@ -401,6 +424,43 @@ def index_near(lo: VecD, hi: VecD, bound: F, counting: int, centers: wp.array(dt
     if counting == 0 and row >= 0:
         out[row, 0] = nearest
     return bound, found
+
+
+@wp.kernel
+def index_clear(heads: wp.array(dtype=wp.int32), level_head: wp.array(dtype=wp.int32),
+                level_count: wp.array(dtype=wp.int32), level_rmax: wp.array(dtype=F)):
+    """An empty index: every bucket and level list empty (on ``max(buckets, levels)`` threads)."""
+    i = wp.tid()
+    if i < heads.shape[0]:
+        heads[i] = -1
+    if i < level_head.shape[0]:
+        level_head[i] = -1
+        level_count[i] = 0
+        level_rmax[i] = F(0.0)
+
+
+@wp.kernel
+def index_insert_range(start: int, centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
+                       origin: wp.array(dtype=F), top: F, heads: wp.array(dtype=wp.int32),
+                       nxt: wp.array(dtype=wp.int32), level_of: wp.array(dtype=wp.int32),
+                       level_head: wp.array(dtype=wp.int32), level_next: wp.array(dtype=wp.int32),
+                       level_count: wp.array(dtype=wp.int32), level_rmax: wp.array(dtype=F)):
+    """Put sphere ``start + tid`` in its level's grid and list. The lists' order follows the
+    atomics, which no query depends on: a query's answers are sets, and its nearest sphere is
+    the lowest id among equals (index_near)."""
+    s = start + wp.tid()
+    level = index_level(radii[s], top, level_head.shape[0])
+    side = top
+    for _ in range(level):
+        side = side * F(0.5)
+    cell = VecD()
+    for k in range(D):
+        cell[k] = wp.floor((centers[s][k] - origin[k]) / side)
+    nxt[s] = wp.atomic_exch(heads, index_bucket(level, cell, heads.shape[0] - 1), s)
+    level_of[s] = level
+    level_next[s] = wp.atomic_exch(level_head, level, s)
+    wp.atomic_add(level_count, level, 1)
+    wp.atomic_max(level_rmax, level, radii[s])
 
 
 @wp.kernel

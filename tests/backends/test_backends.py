@@ -245,6 +245,22 @@ def _exercise(store, centers, radii, rng):
     tenth = np.sort(store.all()[1])[-10]
     answers["top"] = np.array([store.top(), store.top(below=tenth), store.top(below=-np.inf)])
     assert answers["top"][0] > answers["top"][1] > 0 and answers["top"][2] == -np.inf
+    # At most so many: the largest (and any equal to the last), from answers longer than the first
+    # copy (a device store copies one row first here: the trimmed path); and the cells that may
+    # split, by their bounds.
+    if hasattr(store, "prefix"):
+        store.prefix.clear()
+        store.FIRST_PREFIX = 1
+    answers["window_most"] = store.window(0.9, most=5)
+    answers["candidates_most"] = store.candidates(low=0.0, most=70)
+    answers["candidates_none"] = store.candidates(low=0.0, most=0)
+    answers["split_most"] = store.split_candidates(0.0, 0.01, most=9)
+    answers["split_all"] = store.split_candidates(0.0, 0.01)
+    assert len(answers["window_most"][0]) == 5 and len(answers["candidates_most"][0]) == 70
+    ninth = np.sort(answers["split_all"][1])[-9]  # equal bounds (cells alike) all come along
+    assert len(answers["split_all"][0]) > len(answers["split_most"][0]) >= 9
+    assert (answers["split_most"][1] >= ninth).all() and (answers["split_all"][1] >= ninth).sum() == len(
+        answers["split_most"][0])
     return answers
 
 
@@ -259,7 +275,10 @@ def test_small_device_store_matches_host_store(name):
     device = backend.prototypes(shape, *[a.copy() for a in arrays])
     assert isinstance(device, DevicePrototypes)
     host = HostPrototypes(backend, shape, *[a.copy() for a in arrays])
+    trimmed, largest_rows = [], device._largest_rows
+    device._largest_rows = lambda *args: trimmed.append(args) or largest_rows(*args)
     got = _exercise(device, centers, radii, np.random.default_rng(1))
+    assert len(trimmed) == 3  # the answers longer than their first copy (not most=0: copied whole first)
     expected = _exercise(host, centers, radii, np.random.default_rng(1))
     assert len(got["touched"][0]) > 10 and len(got["unpolished"]) < len(arrays[2])  # the calls did something
     for key, value in expected.items():
@@ -268,6 +287,59 @@ def test_small_device_store_matches_host_store(name):
         for g, e in zip(got_parts, parts, strict=True):
             assert np.shape(g) == np.shape(e), key
             np.testing.assert_allclose(g, e, rtol=0, atol=1e-12, err_msg=key)
+
+
+def _lists(heads, nxt):
+    """The ids of each non-empty linked list (from ``heads``, through ``nxt``), as sets by head slot."""
+    lists = {}
+    for slot, s in enumerate(heads):
+        members = set()
+        while s >= 0:
+            assert s not in members, "a list runs in a circle"
+            members.add(int(s))
+            s = nxt[s]
+        if members:
+            lists[slot] = members
+    return lists
+
+
+@pytest.mark.parametrize("name", DEVICE_STORES)
+def test_small_device_index_holds_what_the_host_index_holds(name):
+    """The sphere index the device builds (atomics, lists in any order) holds every sphere where
+    the host's serial build puts it: the same buckets, the same level lists, counts and largest
+    radii; through growth past its capacity (everything inserted again), a new set of spheres
+    (arrays kept, cleared) and spheres with nothing new."""
+    from ndpack.backends.numba_common import geometry_kernels
+    from ndpack.backends.sphere_index import DeviceIndex, SphereIndex
+
+    shape, arrays, _, _, rng = _store_inputs()
+    device = backends.get_backend(name).prototypes(shape, *arrays).device
+    index = DeviceIndex(2, device)
+    count = 150 if SIMULATED else 400
+    centers = rng.uniform(-1.0, 2.0, (count, 2))
+    radii = 10.0 ** rng.uniform(-6, -1, count)  # many octaves
+    radii[[7, 90]] = 0.5  # larger than the first spheres' top: level 0
+    insert = geometry_kernels(2)["index_insert_range"]
+    incremental = SphereIndex(insert)  # the host's build, synced alike
+    for stop, spheres in ((5, centers), (50, centers), (50, centers), (count, centers), (60, centers[::-1].copy())):
+        some_centers, some_radii = spheres[:stop], (radii if spheres is centers else radii[::-1].copy())[:stop]
+        d_centers, d_radii = device.upload(some_centers, "point"), device.upload(some_radii, "float")
+        got = index.sync(some_centers, some_radii, d_centers, d_radii)
+        assert got[1] == incremental.sync(some_centers, some_radii)[1]  # top: reset at the same syncs
+        # The host's build again with the device's buckets (kept from a larger set) and top.
+        host = SphereIndex(insert)
+        host._reset(some_centers, some_radii, index.capacity)
+        expected = (host.arrays[0], got[1], *host.arrays[2:])
+        insert(0, stop, some_centers, some_radii, *expected)
+        fetched = device.fetch(*[(got[i], len(got[i])) for i in (2, 3, 4, 5, 6, 7, 8)])
+        heads, nxt, level_of, level_head, level_next, level_count, level_rmax = fetched
+        assert len(heads) == len(expected[2])
+        assert _lists(heads, nxt) == _lists(expected[2], expected[3])
+        assert _lists(level_head, level_next) == _lists(expected[5], expected[6])
+        np.testing.assert_array_equal(level_of[:stop], expected[4][:stop])
+        np.testing.assert_array_equal(level_count, expected[7])
+        np.testing.assert_allclose(level_rmax, expected[8], rtol=1e-7 if name == "warp" else 0)
+        assert sum(map(len, _lists(heads, nxt).values())) == stop
 
 
 @pytest.mark.parametrize("name", DEVICE_STORES)

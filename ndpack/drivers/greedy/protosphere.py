@@ -29,7 +29,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from ...backends import get_backend
-from ...backends.prototypes import best_starts, cell_bounds
+from ...backends.prototypes import best_starts, cell_bounds, top_order
 from ...backends.restarts import Restarts, run_key, stream
 from ...consistency import ensure_possible
 from ...errors import KEPT_IN_ERROR, GridWarning, InvalidPackingError, ParameterError, RepairWarning, ShapeError
@@ -599,11 +599,11 @@ class RunState:
             if self.out_of_time():
                 searched["ended"] = "time"
                 break
-            ids, bound = store.split_candidates(low, longest)
             memory = MAX_PROTOTYPES - len(store)
             allowed = max(0, min(most - searched["cells"], memory))
+            ids, bound = store.split_candidates(low, longest, most=allowed + 1)  # one more: whether cells wait
             if len(ids) > allowed:
-                ids = np.sort(ids[np.argsort(-bound, kind="stable")[:allowed]])
+                ids = np.sort(ids[top_order(ids, bound, allowed)])
                 searched["ended"] = f"{most:,} new cells" if allowed < memory else f"{MAX_PROTOTYPES:,} prototypes"
             if len(ids) == 0:
                 break

@@ -273,18 +273,19 @@ class Fast:
         ceiling = max_radius + state.margin  # a clearance above it gives a sphere of max_radius
         passes = 0
         while True:
-            ids, clearance, points, polished, top = store.window(window)  # one query: one sync on a GPU
+            # One query, one sync on a GPU; no more candidates than a round takes.
+            ids, clearance, points, polished, top = store.window(window, most=MAX_CANDIDATES)
             if top <= 0:
                 return np.empty((0, state.dim)), np.empty(0)
             frontier = top
             if top > ceiling:
                 frontier = ceiling
-                ids, clearance, points, polished = store.candidates(low=(1 - window) * ceiling)
+                ids, clearance, points, polished = store.candidates((1 - window) * ceiling, MAX_CANDIDATES)
             elif top >= (1 - window) * self.frontier and len(ids) < few:
                 below = store.top(below=(1 - window) * top)
                 if below > 0:
                     frontier = below
-                    ids, clearance, points, polished = store.candidates(low=(1 - window) * frontier)
+                    ids, clearance, points, polished = store.candidates((1 - window) * frontier, MAX_CANDIDATES)
             order = top_order(ids, clearance, min(MAX_CANDIDATES, len(ids)))
             ids, clearance, points, polished = ids[order], clearance[order], points[order], polished[order]
             full = capped(state, clearance, max_radius)
@@ -344,12 +345,12 @@ class Fast:
             if state.out_of_time():  # the run ends after this round: split no more
                 break
             low = (1 - self.window) * top
-            ids, bound = store.split_candidates(low, max(self.ratio * top, 1e3 * state.margin))
             allowed = max(0, MAX_PROTOTYPES - len(store))
             if most is not None:
                 allowed = min(allowed, most - total)
-            if len(ids) > allowed:  # the largest bounds first
-                ids = np.sort(ids[np.argsort(-bound, kind="stable")[:allowed]])
+            ids, bound = store.split_candidates(low, max(self.ratio * top, 1e3 * state.margin), most=allowed)
+            if len(ids) > allowed:  # the largest bounds first (ties: the lower id, as the ids come ascending)
+                ids = np.sort(ids[top_order(ids, bound, allowed)])
             if len(ids) == 0:
                 break
             new = store.split_cells(ids, state.wall_slack)

@@ -1,0 +1,91 @@
+#!/usr/bin/env bash
+# Issue 48, fifth step (the host's part of a round: the sphere index built on the device, partial
+# sorts, the conflict check's pairs), on the GPU machine after the set-up runs (../shared/device/README.md):
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step5.sh host     where the host's time goes: cProfile of
+#        the armadillo at 100,000 and 1,000,000 and the unit cube at 1,000,000 on Warp (fast mode)
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step5.sh measure  this checkout against the one in
+#        .gpu2/base (BASE, the commit before the step: git archive BASE ndpack | tar x -C .gpu2/base), in one
+#        run: the armadillo at 100,000 (3 runs each; numba on the host's cores beside them) and at
+#        1,000,000 (2 runs each; and without polishing ahead), the unit cube at 1,000,000 (2 runs each) and
+#        the unit square at 1,000,000 (2 runs); the spheres of both side by side; the files in one
+#        archive, $OUT/measure_CARD_issue48_STEP.tgz
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step5.sh final    this checkout alone: a fresh machine's
+#        first packing of a mesh; the armadillo at 100,000 (3 runs; numba on the host's cores beside it)
+#        and 1,000,000 (2 runs), the unit cube and square at 1,000,000 (2 runs; numba one run each), and the
+#        host's cProfile of the armadillo at 1,000,000; the files in one archive, $OUT/final_CARD_issue48_step5.tgz
+set -uo pipefail
+source bench/gpu_header.sh
+[ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
+STEP=${STEP:-step5}
+export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
+# kernels VERSION NAME ARGS...: bench/profile_kernels.py with VERSION's ndpack (now: this checkout; base:
+# .gpu2/base), unprofiled runs only, stages timed, the table to $OUT/NAME_VERSION.json.
+kernels() {
+  local version=$1 name=$2
+  shift 2
+  local path=$PYTHONPATH
+  [ "$version" = base ] && path=$PWD/.gpu2/base:$PYTHONPATH
+  PYTHONPATH=$path timeout 300 python3 bench/profile_kernels.py --stages --no-profiled \
+    --out "$OUT/${name}_${version}.json" "$@" 2>&1 | grep -v "^Warp\|^Module"
+}
+case "${1:-}" in
+  host)
+    for count in 100000 1000000; do
+      timeout 200 python3 bench/profile_rounds.py --backends warp --mode fast --mesh /tmp/armadillo.obj \
+        --count $count --top 30 --out "$OUT/host_${CARD}_armadillo_${count}_issue48_${STEP}.txt" 2>&1 \
+        | grep -v "^Warp\|^Module"
+    done
+    timeout 150 python3 bench/profile_rounds.py --backends warp --mode fast --count 1000000 --top 30 \
+      --out "$OUT/host_${CARD}_cube_1000000_issue48_${STEP}.txt" 2>&1 | grep -v "^Warp\|^Module"
+    ;;
+  measure)
+    [ -d .gpu2/base/ndpack ] || { echo "measure: .gpu2/base/ndpack is missing" >&2; exit 2; }
+    FINAL=$OUT
+    OUT=/tmp/measure && mkdir -p $OUT && cp "$FINAL/gpu.txt" $OUT/
+    for version in base now; do
+      kernels $version "armadillo_100k_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj \
+        --count 100000 --repeats 3 --spheres /tmp/armadillo_100k_$version.npz
+    done
+    kernels now "armadillo_100k_${CARD}host_numba_issue48_${STEP}" --backends numba --mesh /tmp/armadillo.obj \
+      --count 100000 --repeats 3
+    kernels base "armadillo_1m_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj --count 1000000 \
+      --repeats 2 --spheres /tmp/armadillo_1m_base.npz
+    kernels now "armadillo_1m_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj --count 1000000 \
+      --repeats 2 --variants now no-ahead --spheres /tmp/armadillo_1m_now.npz
+    for version in base now; do
+      kernels $version "cube_1m_${CARD}_issue48_${STEP}" --backends warp --count 1000000 --repeats 2 \
+        --spheres /tmp/cube_1m_$version.npz
+    done
+    kernels now "square_1m_${CARD}_issue48_${STEP}" --backends warp --square --count 1000000 --repeats 2
+    python3 - <<'PY' | tee "$OUT/same_spheres_${CARD}_issue48_${STEP}.txt"
+import numpy as np
+for case in ("armadillo_100k", "armadillo_1m", "cube_1m"):
+    base, now = (np.load(f"/tmp/{case}_{v}.npz") for v in ("base", "now"))
+    same = len(base["radii"]) == len(now["radii"])
+    change = float(np.abs(base["radii"] - now["radii"]).max()) if same else None
+    moved = float(np.abs(base["centers"] - now["centers"]).max()) if same else None
+    print(f"{case}, base against now: spheres {len(base['radii'])} and {len(now['radii'])}, "
+          f"largest radius change {change}, largest centre change {moved}")
+PY
+    tar czf "$FINAL/measure_${CARD}_issue48_${STEP}.tgz" -C $OUT .
+    ;;
+  final)
+    FINAL=$OUT
+    OUT=/tmp/final && mkdir -p $OUT && cp "$FINAL/gpu.txt" $OUT/
+    cold_first_packing "$OUT/compile_${CARD}_issue48_${STEP}.txt"
+    kernels now "armadillo_100k_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj --count 100000 \
+      --repeats 3
+    kernels now "armadillo_100k_${CARD}host_numba_issue48_${STEP}" --backends numba --mesh /tmp/armadillo.obj \
+      --count 100000 --repeats 3
+    kernels now "armadillo_1m_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj --count 1000000 \
+      --repeats 2
+    kernels now "cube_1m_${CARD}_issue48_${STEP}" --backends warp --count 1000000 --repeats 2
+    kernels now "square_1m_${CARD}_issue48_${STEP}" --backends warp --square --count 1000000 --repeats 2
+    kernels now "cube_1m_${CARD}host_numba_issue48_${STEP}" --backends numba --count 1000000 --repeats 1
+    kernels now "square_1m_${CARD}host_numba_issue48_${STEP}" --backends numba --square --count 1000000 --repeats 1
+    timeout 200 python3 bench/profile_rounds.py --backends warp --mode fast --mesh /tmp/armadillo.obj \
+      --count 1000000 --top 30 --out "$OUT/host_${CARD}_armadillo_1000000_issue48_${STEP}.txt" 2>&1 | tail -3
+    tar czf "$FINAL/final_${CARD}_issue48_${STEP}.tgz" -C $OUT .
+    ;;
+  *) echo "usage: bash bench/gpu_issue48_step5.sh host|measure|final" >&2; exit 2 ;;
+esac
