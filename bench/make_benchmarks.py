@@ -77,12 +77,7 @@ SOURCES = {
     **{name: Source("H100, NumPy 2.5", commit, f"bash bench/gpu_issue48_step2.sh {mode}", "2026-11-27")
        for name, commit, mode in [
            ("profile_kernels_h100_armadillo_issue48_step2.json", "3ffe337", "armadillo"),
-           ("profile_kernels_h100host_numba_armadillo_issue48_step2.json", "3ffe337", "armadillo"),
-           ("million_h100_cube_issue48_step2.json", "b55d5e0", "million"),
-           ("million_h100_armadillo_issue48_step2.json", "b55d5e0", "million"),
-           ("million_h100host_numba_cube_issue48_step2.json", "b55d5e0", "million"),
-           ("million_h100_square_issue48_step2.json", "b55d5e0", "square"),
-           ("million_h100host_numba_square_issue48_step2.json", "b55d5e0", "square")]},
+           ("profile_kernels_h100host_numba_armadillo_issue48_step2.json", "3ffe337", "armadillo")]},
     # Issue 48's cooperative walks: bench/gpu_issue48_step4.sh MODE (step3.sh: moves only, the constants' run).
     **{name: Source("H100, NumPy 2.5", "5c7e1fc", f"bash bench/gpu_issue48_step4.sh {mode}", "2026-11-27")
        for name, mode in [("profile_kernels_h100_armadillo_issue48_step4.json", "lanes"),
@@ -92,6 +87,20 @@ SOURCES = {
        for name, mode in [("profile_kernels_h200_armadillo_issue48_step4.json", "lanes"),
                           ("profile_kernels_h200host_numba_armadillo_issue48_step4.json", "lanes"),
                           ("million_h200_armadillo_issue48_step4.json", "million")]},
+    # Issue 48's fifth step (the host's part of a round): bench/gpu_issue48_step5.sh final on an H100, and
+    # measure on an H200 (this code against main before, 49cef62, in one run).
+    **{name: Source("H100, NumPy 2.5", "d7c0654", "bash bench/gpu_issue48_step5.sh final", "2026-11-27")
+       for name in ["armadillo_100k_h100_issue48_step5_now.json",
+                    "armadillo_100k_h100host_numba_issue48_step5_now.json", "armadillo_1m_h100_issue48_step5_now.json",
+                    "cube_1m_h100_issue48_step5_now.json", "cube_1m_h100host_numba_issue48_step5_now.json",
+                    "square_1m_h100_issue48_step5_now.json", "square_1m_h100host_numba_issue48_step5_now.json"]},
+    **{name: Source("H200, NumPy 2.5", commit, "bash bench/gpu_issue48_step5.sh measure", "2026-11-27")
+       for name, commit in [("armadillo_100k_h200_issue48_step5_base.json", "49cef62"),
+                            ("armadillo_1m_h200_issue48_step5_base.json", "49cef62"),
+                            ("cube_1m_h200_issue48_step5_base.json", "49cef62"),
+                            ("armadillo_100k_h200_issue48_step5_now.json", "d7c0654"),
+                            ("armadillo_1m_h200_issue48_step5_now.json", "d7c0654"),
+                            ("cube_1m_h200_issue48_step5_now.json", "d7c0654")]},
     "profile_kernels_h200_armadillo_issue48_step3.json": Source(
         "H200, NumPy 2.5", "5d70ad2", "bash bench/gpu_issue48_step3.sh lanes", "2026-11-27"),
     "cooperative_walk_2core_armadillo.json": Source("2 cores", "5d70ad2", "python bench/cooperative_walk.py"),
@@ -333,12 +342,20 @@ def scale_h100() -> list[str]:
     cold = {card: float(re.search(r"cache empty: ([0-9.]+) s", (RESULTS / f"compile_{card}_issue48_step4.txt")
                                   .read_text())[1]) for card in ("h100", "h200")}
     h100 = load("profile_kernels_h100_armadillo_issue48_step4.json")
-    h100_cpu = load("profile_kernels_h100host_numba_armadillo_issue48_step4.json")["numba"]
     h100_1m = load("million_h100_armadillo_issue48_step4.json")
-    cube_1m, cube_1m_cpu = load("million_h100_cube_issue48_step2.json")["warp"], \
-        load("million_h100host_numba_cube_issue48_step2.json")["numba"]
-    square_1m, square_1m_cpu = load("million_h100_square_issue48_step2.json")["warp"], \
-        load("million_h100host_numba_square_issue48_step2.json")["numba"]
+    step5 = {name: load(f"{name}_issue48_step5_now.json") for name in (
+        "armadillo_100k_h100", "armadillo_100k_h100host_numba", "armadillo_1m_h100", "cube_1m_h100",
+        "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")}
+    arm5, arm5_cpu, arm5_1m = (step5[name][key] for name, key in [
+        ("armadillo_100k_h100", "warp"), ("armadillo_100k_h100host_numba", "numba"), ("armadillo_1m_h100", "warp")])
+    cube_1m, cube_1m_cpu = step5["cube_1m_h100"]["warp"], step5["cube_1m_h100host_numba"]["numba"]
+    square_1m, square_1m_cpu = step5["square_1m_h100"]["warp"], step5["square_1m_h100host_numba"]["numba"]
+    step5_files = [f"{name}_issue48_step5_now.json" for name in step5] + [
+        f"{case}_h200_issue48_step5_{version}.json" for version in ("base", "now")
+        for case in ("armadillo_100k", "armadillo_1m", "cube_1m")]
+    host_part = {(case, version): load(f"{case}_h200_issue48_step5_{version}.json")
+                 for case in ("armadillo_100k", "armadillo_1m", "cube_1m") for version in ("base", "now")}
+    cold5 = float(re.search(r"cache empty: ([0-9.]+) s", (RESULTS / "compile_h100_issue48_step5.txt").read_text())[1])
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
     before = load("profile_kernels_h100_armadillo_issue48_before.json")["warp"]
     model = load("work_model_2core_armadillo_100k_issue48_step2.json")
@@ -363,16 +380,16 @@ def scale_h100() -> list[str]:
              for name, old, new, model_, new4, model4_ in zip(names, parts(before), parts(arm), guess, parts(arm3),
                                                                guess4)]
     rows = [
-        ["armadillo (100k triangles)", "100,000", seconds(h100["warp now"]["median"]), "",
-         seconds(h100_cpu["median"]), f"{h100['warp now']['fill']:.4f}", "medians of 3, 5c7e1fc"],
+        ["armadillo (100k triangles)", "100,000", seconds(arm5["median"]), "", seconds(arm5_cpu["median"]),
+         f"{arm5['fill']:.4f}", "medians of 3, d7c0654"],
         ["unit cube", "100,000", *[seconds(median_of(cube, backend=b)) for b in ("warp", "numba-cuda", "numba")],
          f"{median_of(cube, 'fill', backend='warp'):.4f}", "medians of 2, 4ea141e"],
-        ["armadillo (100k triangles)", "1,000,000", seconds(h100_1m["warp now"]["median"]), "", "",
-         f"{h100_1m['warp now']['fill']:.4f}", "median of 2, 5c7e1fc"],
+        ["armadillo (100k triangles)", "1,000,000", seconds(arm5_1m["median"]), "", "",
+         f"{arm5_1m['fill']:.4f}", "median of 2, d7c0654"],
         ["unit cube", "1,000,000", seconds(cube_1m["median"]), "", seconds(cube_1m_cpu["median"]),
-         f"{cube_1m['fill']:.4f}", "median of 3 (numba: 1), b55d5e0"],
+         f"{cube_1m['fill']:.4f}", "median of 2 (numba: 1), d7c0654"],
         ["unit square", "1,000,000", seconds(square_1m["median"]), "", seconds(square_1m_cpu["median"]),
-         f"{square_1m['fill']:.4f}", "median of 2 (numba: 1), b55d5e0"],
+         f"{square_1m['fill']:.4f}", "median of 2 (numba: 1), d7c0654"],
         ["unit cube", "10,000,000", seconds(warp_10m["seconds"]), "", "", f"{warp_10m['fill']:.4f}",
          "one run, e7f6fee"],
     ]
@@ -387,7 +404,7 @@ def scale_h100() -> list[str]:
         "(a warm-up packing first). numba-cuda was not run on 3ffe337 or later (the image's NumPy 2.5 breaks it).",
         "",
         *table(head, rows),
-        f"Warp is {h100_cpu['median'] / h100['warp now']['median']:.1f}x the host's 16 cores on the armadillo at "
+        f"Warp is {arm5_cpu['median'] / arm5['median']:.1f}x the host's 16 cores on the armadillo at "
         "100,000, "
         f"{cube_1m_cpu['median'] / cube_1m['median']:.1f}x on the cube and "
         f"{square_1m_cpu['median'] / square_1m['median']:.1f}x on the square at a million (goals: 5x; 1 s, 8 s, 5 s). "
@@ -421,11 +438,24 @@ def scale_h100() -> list[str]:
         f"(H100; packing {optimised['default']['median_s']:.2f} and {optimised['O2']['median_s']:.2f} s); with the "
         f"cooperative module to compile too, {cold['h100']:.1f} s (H100) and {cold['h200']:.1f} s (H200) "
         "([output](../bench/results/compile_h100_issue48_step4.txt)).",
-        *sources("profile_kernels_h100_armadillo_issue48_step2.json",
+        "**The host's part of a round** (fifth step): the sphere index built on the device (no serial insert, no "
+        "copy of every bucket head), the conflict check's pairs in a sorted grid, and only the most a round takes "
+        "of its window and of the cells that may split copied back and sorted. On an H200, in one run against "
+        "49cef62: the armadillo at 100,000 "
+        + ", at a million ".join(
+            f"{seconds(host_part[(case, 'base')]['warp']['median'])} before, "
+            f"{seconds(host_part[(case, 'now')][key]['median'])} after" for case, key in
+            [("armadillo_100k", "warp"), ("armadillo_1m", "warp now")])
+        + f" (without polishing ahead {seconds(host_part[('armadillo_1m', 'now')]['warp no-ahead']['median'])}), the "
+        f"cube at a million {seconds(host_part[('cube_1m', 'base')]['warp']['median'])} before, "
+        f"{seconds(host_part[('cube_1m', 'now')]['warp']['median'])} after; the same spheres to the bit "
+        "([output](../bench/results/same_spheres_h200_issue48_step5.txt); the host's profiles: "
+        "[before](../bench/results/host_h200_armadillo_1000000_issue48_step5_before.txt), "
+        "[after, H100](../bench/results/host_h100_armadillo_1000000_issue48_step5.txt)). A fresh H100's first "
+        f"packing of a mesh: {cold5:.1f} s ([output](../bench/results/compile_h100_issue48_step5.txt)).",
+        *sources(*step5_files, "profile_kernels_h100_armadillo_issue48_step2.json",
                  "profile_kernels_h100host_numba_armadillo_issue48_step2.json",
-                 "million_h100_cube_issue48_step2.json", "million_h100_armadillo_issue48_step2.json",
-                 "million_h100host_numba_cube_issue48_step2.json", "million_h100_square_issue48_step2.json",
-                 "million_h100host_numba_square_issue48_step2.json", "round_time_h100_cube_issue20_step7.json",
+                 "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
                  "work_model_2core_armadillo_100k_issue48_before.json",
                  "work_model_2core_armadillo_100k_issue48_step2.json", "policy_fill_2core_10k.json",
@@ -491,8 +521,8 @@ def other_shapes_h100() -> list[str]:
     return [
         "## Other shapes and dimensions: H100",
         "",
-        "Fast mode, seed 0, one run: seconds to the round that reached the count. This is the code of issue 5's",
-        "fifth measurement, before issue 20's GPU work: later code was not measured on these shapes (its unit",
+        "Fast mode, seed 0, one run: seconds to the round that reached the count. This is the code of issue 5's "
+        "fifth measurement, before issue 20's GPU work: later code was not measured on these shapes (its unit "
         "cube is in the table above). The plots: `python bench/plot_scale.py "
         "bench/results/scale_{boxes,subdivided,nd}_h100_warp.json --machine H100`.",
         "",
@@ -592,9 +622,9 @@ def high_dim_speed() -> list[str]:
         "The index alone, on a packing's own largest recorded query (median of 3): "
         f"{', '.join(query_speedups)}.",
         "",
-        "H100, Warp, fast mode, one run each, seconds and fill: before issue 47 (`f1ab864`: window 0.2), with its",
-        "narrower window (`f7731f1`), and now; the last column is numba on the same host's 16 cores, now. The",
-        "narrower window fills 1.5-2.3% more but takes more rounds, each a set of launches: a cost the GPU",
+        "H100, Warp, fast mode, one run each, seconds and fill: before issue 47 (`f1ab864`: window 0.2), with its "
+        "narrower window (`f7731f1`), and now; the last column is numba on the same host's 16 cores, now. The "
+        "narrower window fills 1.5-2.3% more but takes more rounds, each a set of launches: a cost the GPU "
         "pays (issue 48's subject).",
         "",
         *table(["case", "`f1ab864`", "`f7731f1`", "now", "numba, 16 cores"], gpu_rows),
