@@ -13,6 +13,8 @@
 #        first packing of a mesh; the armadillo at 100,000 (3 runs; numba on the host's cores beside it)
 #        and 1,000,000 (2 runs), the unit cube and square at 1,000,000 (2 runs; numba one run each), and the
 #        host's cProfile of the armadillo at 1,000,000; the files in one archive, $OUT/final_CARD_issue48_step5.tgz
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step5.sh memory   the GPU's peak memory (nvidia-smi, every
+#        0.2 s, the CUDA context included) in one packing of the armadillo and of the unit cube at 1,000,000
 set -uo pipefail
 source bench/gpu_header.sh
 [ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
@@ -87,5 +89,23 @@ PY
       --count 1000000 --top 30 --out "$OUT/host_${CARD}_armadillo_1000000_issue48_${STEP}.txt" 2>&1 | tail -3
     tar czf "$FINAL/final_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step5.sh host|measure|final" >&2; exit 2 ;;
+  memory)
+    for case in armadillo cube; do
+      shape="nd.TriangleMesh.load('/tmp/armadillo.obj')"
+      [ $case = cube ] && shape="nd.Box(np.zeros(3), np.ones(3))"
+      python3 -c "import ndpack as nd, numpy as np; nd.pack($shape, 3, backend='warp', mode='fast')" 2>&1 | tail -1
+      nvidia-smi --query-gpu=memory.used --format=csv,noheader,nounits -lms 200 > /tmp/memory_$case.txt &
+      sampler=$!
+      python3 -c "
+import time, ndpack as nd, numpy as np
+started = time.perf_counter()
+packing = nd.pack($shape, 1_000_000, backend='warp', mode='fast', progress=False)
+print('$case', len(packing.radii), 'spheres', f'{time.perf_counter() - started:.2f} s', f'fill {packing.fill:.5f}')
+" 2>&1 | grep -v "^Warp\|^Module"
+      kill $sampler
+      echo "$case at 1,000,000: peak GPU memory used (MiB, whole device): $(sort -n /tmp/memory_$case.txt | tail -1)" \
+        | tee -a "$OUT/memory_${CARD}_issue48_${STEP}.txt"
+    done
+    ;;
+  *) echo "usage: bash bench/gpu_issue48_step5.sh host|measure|final|memory" >&2; exit 2 ;;
 esac

@@ -356,6 +356,8 @@ def scale_h100() -> list[str]:
     host_part = {(case, version): load(f"{case}_h200_issue48_step5_{version}.json")
                  for case in ("armadillo_100k", "armadillo_1m", "cube_1m") for version in ("base", "now")}
     cold5 = float(re.search(r"cache empty: ([0-9.]+) s", (RESULTS / "compile_h100_issue48_step5.txt").read_text())[1])
+    peak5 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
+                            (RESULTS / "memory_h100_issue48_step5.txt").read_text()))
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
     before = load("profile_kernels_h100_armadillo_issue48_before.json")["warp"]
     model = load("work_model_2core_armadillo_100k_issue48_step2.json")
@@ -452,7 +454,10 @@ def scale_h100() -> list[str]:
         "([output](../bench/results/same_spheres_h200_issue48_step5.txt); the host's profiles: "
         "[before](../bench/results/host_h200_armadillo_1000000_issue48_step5_before.txt), "
         "[after, H100](../bench/results/host_h100_armadillo_1000000_issue48_step5.txt)). A fresh H100's first "
-        f"packing of a mesh: {cold5:.1f} s ([output](../bench/results/compile_h100_issue48_step5.txt)).",
+        f"packing of a mesh: {cold5:.1f} s ([output](../bench/results/compile_h100_issue48_step5.txt)); its peak "
+        f"memory at a million (whole device, `bash bench/gpu_issue48_step5.sh memory`): the armadillo "
+        f"{int(peak5['armadillo']):,} MiB, the cube {int(peak5['cube']):,} MiB "
+        "([output](../bench/results/memory_h100_issue48_step5.txt)).",
         *sources(*step5_files, "profile_kernels_h100_armadillo_issue48_step2.json",
                  "profile_kernels_h100host_numba_armadillo_issue48_step2.json",
                  "round_time_h100_cube_issue20_step7.json",
