@@ -13,6 +13,8 @@
 #        first packing of a mesh; the armadillo at 100,000 (3 runs; numba on the host's cores beside it)
 #        and 1,000,000 (2 runs), the unit cube and square at 1,000,000 (2 runs; numba one run each), and the
 #        host's cProfile of the armadillo at 1,000,000; the files in one archive, $OUT/final_CARD_issue48_step5.tgz
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step5.sh profile  the armadillo at 100,000 with every launch
+#        timed (and 3 unprofiled runs, stages timed): what bench/work_model.py --against sets its counts beside
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step5.sh memory   the GPU's peak memory (nvidia-smi, every
 #        0.2 s, the CUDA context included) in one packing of the armadillo and of the unit cube at 1,000,000
 set -uo pipefail
@@ -89,6 +91,11 @@ PY
       --count 1000000 --top 30 --out "$OUT/host_${CARD}_armadillo_1000000_issue48_${STEP}.txt" 2>&1 | tail -3
     tar czf "$FINAL/final_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
+  profile)
+    timeout 300 python3 bench/profile_kernels.py --backends warp --mesh /tmp/armadillo.obj --count 100000 \
+      --repeats 3 --stages --out "$OUT/profile_kernels_${CARD}_armadillo_issue48_${STEP}.json" 2>&1 \
+      | grep -v "^Warp\|^Module\|^ndpack: compiling" | tail -30
+    ;;
   memory)
     for case in armadillo cube; do
       shape="nd.TriangleMesh.load('/tmp/armadillo.obj')"
@@ -107,5 +114,5 @@ print('$case', len(packing.radii), 'spheres', f'{time.perf_counter() - started:.
         | tee -a "$OUT/memory_${CARD}_issue48_${STEP}.txt"
     done
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step5.sh host|measure|final|memory" >&2; exit 2 ;;
+  *) echo "usage: bash bench/gpu_issue48_step5.sh host|measure|final|profile|memory" >&2; exit 2 ;;
 esac

@@ -101,6 +101,12 @@ SOURCES = {
                             ("armadillo_100k_h200_issue48_step5_now.json", "d7c0654"),
                             ("armadillo_1m_h200_issue48_step5_now.json", "d7c0654"),
                             ("cube_1m_h200_issue48_step5_now.json", "d7c0654")]},
+    "profile_kernels_h200_armadillo_issue48_step5.json": Source(
+        "H200, NumPy 2.5", "d7c0654", "bash bench/gpu_issue48_step5.sh profile", "2026-11-27"),
+    "work_model_2core_armadillo_100k_issue48_step5.json": Source(
+        "2 cores", "d7c0654", "python bench/work_model.py --mesh armadillo.obj --count 100000 --against "
+        "bench/results/profile_kernels_h200_armadillo_issue48_step5.json --constants "
+        "bench/results/work_model_2core_armadillo_100k_issue48_step4.json"),
     "profile_kernels_h200_armadillo_issue48_step3.json": Source(
         "H200, NumPy 2.5", "5d70ad2", "bash bench/gpu_issue48_step3.sh lanes", "2026-11-27"),
     "cooperative_walk_2core_armadillo.json": Source("2 cores", "5d70ad2", "python bench/cooperative_walk.py"),
@@ -375,12 +381,17 @@ def scale_h100() -> list[str]:
     names = ["set-up", "move launches", "other launches", "host, in the rounds", "final check", "whole call"]
     guess = [predicted["setup"], predicted["moves"], predicted["other_launches"], predicted["host"],
              predicted["verify"], predicted["seconds"]]
+    model5 = load("work_model_2core_armadillo_100k_issue48_step5.json")
+    arm5_profiled = load("profile_kernels_h200_armadillo_issue48_step5.json")["warp"]
+    predicted5 = model5["prediction"]
+    guess5 = [predicted5[key] for key in ("setup", "moves", "other_launches", "host", "verify", "seconds")]
     predicted4 = model4["prediction"]
     guess4 = [predicted4["setup"], predicted4["moves"], predicted4["other_launches"], predicted4["host"],
               predicted4["verify"], predicted4["seconds"]]
-    split = [[name, seconds(old), seconds(new), seconds(model_), seconds(new4), seconds(model4_)]
-             for name, old, new, model_, new4, model4_ in zip(names, parts(before), parts(arm), guess, parts(arm3),
-                                                               guess4)]
+    split = [[name, seconds(old), seconds(new), seconds(model_), seconds(new4), seconds(model4_), seconds(new5),
+              seconds(model5_)]
+             for name, old, new, model_, new4, model4_, new5, model5_ in zip(
+                 names, parts(before), parts(arm), guess, parts(arm3), guess4, parts(arm5_profiled), guess5)]
     rows = [
         ["armadillo (100k triangles)", "100,000", seconds(arm5["median"]), "", seconds(arm5_cpu["median"]),
          f"{arm5['fill']:.4f}", "medians of 3, d7c0654"],
@@ -417,7 +428,8 @@ def scale_h100() -> list[str]:
         f"(`bench/work_model.py`; same launches: {'yes' if gpu['same_launches'] else 'no'}):",
         "",
         *table(["stage", "H100, before (e08d8b4)", "H100, 3ffe337", "predicted", "H200, cooperative (39d016d)",
-                "predicted (5d70ad2's constants)"], split),
+                "predicted (5d70ad2's constants)", "H200, the host's part (d7c0654)", "predicted (39d016d's)"],
+               split),
         f"A move launch lasts as long as its slowest thread's chain ({1e6 * gpu['seconds_per_critical_node']:.2f} us a "
         f"node); the host's round takes {gpu['host_over_cpu']:.1f}x its 2-core time. The final check finds overlaps in "
         "a grid's sorted rows (Numba), not k-d trees. Cells split finer (ratio 2.5, not 4) filled 0.5% more in 34 "
@@ -470,7 +482,9 @@ def scale_h100() -> list[str]:
                  "profile_kernels_h200host_numba_armadillo_issue48_step4.json",
                  "million_h200_armadillo_issue48_step4.json", "profile_kernels_h200_armadillo_issue48_step3.json",
                  "cooperative_walk_2core_armadillo.json", "work_model_2core_armadillo_100k_issue48_step3.json",
-                 "work_model_2core_armadillo_100k_issue48_step4.json"),
+                 "work_model_2core_armadillo_100k_issue48_step4.json",
+                 "profile_kernels_h200_armadillo_issue48_step5.json",
+                 "work_model_2core_armadillo_100k_issue48_step5.json"),
     ]
 
 

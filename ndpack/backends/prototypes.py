@@ -91,8 +91,7 @@ def top_order(ids: np.ndarray, clearance: np.ndarray, k: int) -> np.ndarray:
 
     The tie rule makes every backend choose the same prototype among equal clearances, which
     symmetric shapes produce. Where ``k`` is a small part of them, only those at least the
-    ``k``-th largest are sorted: a million-sphere round's 1.5 million candidates for 65,536
-    took 160 ms sorted whole, 9 ms so (2 cores).
+    ``k``-th largest are sorted (after a partition, linear in their number).
     """
     count = len(clearance)
     if k <= 0:
@@ -164,8 +163,8 @@ class Prototypes:
         """The prototypes with clearance ``>= low``, with what a round needs to choose among them:
         ids (m,) int64 ascending, clearances (m,) float64, points (m, d) float64 and whether each
         is polished (m,) bool. With ``most``, only those of the ``most`` largest clearances and
-        any equal to the last of them (:func:`largest`): a round takes no more, and a million-sphere
-        round's window holds a million or more."""
+        any equal to the last of them (:func:`largest`): a round takes no more, from a store
+        that holds 5 million prototypes at a million spheres of the armadillo."""
         raise NotImplementedError
 
     def window(self, fraction: float, most=None):
@@ -561,8 +560,9 @@ class DevicePrototypes(Prototypes):
         With ``most`` (``fields`` holding the values, 1), only the rows of the ``most`` largest
         values come back (:func:`largest`): of a longer answer only the ids and values are copied,
         and the points and polish flags of the rows kept are gathered from the store (as a
-        selection appends them; not for other kernels). A million-sphere round's window holds
-        1.5 million prototypes for at most ``MAX_CANDIDATES`` candidates.
+        selection appends them; not for other kernels): a round takes at most ``MAX_CANDIDATES``
+        candidates of a window that grows with the store (5 million prototypes at a million
+        spheres of the armadillo).
         """
         device = self.device
         device.fill(self.d_counter, 0)

@@ -107,10 +107,11 @@ class DeviceIndex:
 
     The device inserts the new spheres of each sync in one launch (``index_insert_range``,
     through atomics), so nothing but the launch crosses from the host: a host-built index cost a
-    serial insert a sphere and a copy of every bucket head a sync (32 MB at a million spheres,
-    several times a round; 1.3 s of a million-sphere packing of the armadillo on an H200, issue
-    48). The lists' order then follows the atomics: no query depends on it (a query's answers are
-    sets, its nearest sphere the lowest id among equals).
+    serial insert a sphere and a copy of every bucket head a sync (millions at a million spheres,
+    several times a round): 1.3 s of a million-sphere packing of the armadillo on an H200
+    (``bash bench/gpu_issue48_step5.sh host`` at 49cef62). The lists' order then follows the
+    atomics: no query depends on it (a query's answers are sets, its nearest sphere the lowest id
+    among equals).
 
     Parameters
     ----------
