@@ -44,10 +44,15 @@ _warp_cache: dict[str, object] = {}  # module text -> module
 COMPILES: dict[str, int] = {}
 #: Generated modules made in this process, by the same kinds: each new program text is one.
 MODULES: dict[str, int] = {}
-#: First-use compile time, in seconds, when this machine has not measured that compile yet: Numba
-#: (2 cores), numba-cuda, Warp on a CPU (2 cores: 4 s for the 3-D meshes' kernels) and on a GPU
-#: (an H100: 3 s for them at ``WARP_OPTIMIZATION``, with the driver's compile of the PTX).
-TYPICAL_SECONDS = {"numba": 15, "numba-cuda": 40, "warp": 6, "warp on a GPU": 5}
+#: First-use compile time, in seconds, when this machine has not measured that compile yet: Numba,
+#: numba-cuda, Warp on a CPU (2 cores: 4 s for the 3-D meshes' kernels) and on a GPU. Numba's
+#: first compiles (a cache's ``compile-times.json``) took 6.1 s for the mesh queries, 5.9 s for the
+#: 3-D shapes and 11.7 s for 3-D shapes and meshes on 2 cores (``NDPACK_CACHE=$(mktemp -d) ndpack
+#: pack armadillo.obj -n 3 --backend numba``), 7.4 s for the mesh queries on an H200's host; Warp
+#: on an H200 3.3 s for the 3-D meshes' kernels and 2.5 s for their cooperative moves (at
+#: ``WARP_OPTIMIZATION``, the driver's compile of the PTX included;
+#: bench/results/compile_times_h200_issue48_step4.json). So the estimates are within 2x of each.
+TYPICAL_SECONDS = {"numba": 8, "numba-cuda": 40, "warp": 6, "warp on a GPU": 4}
 #: Warp's CUDA optimisation level for ndpack's modules. At Warp's default (3) a fresh H100's first
 #: packing of a mesh compiled for 90 s (most of it the driver compiling Warp's PTX) and packed the
 #: armadillo's 100,000 spheres in 2.07 s; at 2, 3 s and 2.00 s (medians of 3, the driver's cache
