@@ -63,7 +63,7 @@ def test_launches_are_counted_per_round(work_model):
     assert found["launches"] >= sum(entry["launches"] for entry in found["per_round"])
     assert any(name.startswith("move_ids") for name in found["kernels"]) and found["syncs"] > 0
     # The host's and the check's times are recorded (their size is bench's business, not a test's).
-    assert all(isinstance(found[key], float) for key in ("host_rounds_s", "verify_s"))
+    assert {"host_rounds_s", "verify_s"} <= found.keys()
     assert found["split_ratio"] is not None
 
 

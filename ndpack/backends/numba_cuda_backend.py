@@ -169,21 +169,13 @@ def split_apply(ids, lower, upper, reach, wall, points, clearance, polished, bou
         polished[j] = 0
 
 
-def gather_ids(ids, points, clearance, out_points, out_clearance):
+def gather_ids(ids, points, clearance, polished, out_points, out_clearance, out_flags):
     b = cuda.grid(1)
     if b < ids.shape[0]:
         i = ids[b]
         for k in range(D):
             out_points[b, k] = points[i, k]
         out_clearance[b] = clearance[i]
-
-
-def gather_rows(ids, points, polished, out_points, out_flags):
-    b = cuda.grid(1)
-    if b < ids.shape[0]:
-        i = ids[b]
-        for k in range(D):
-            out_points[b, k] = points[i, k]
         out_flags[b] = polished[i]
 
 
@@ -264,7 +256,7 @@ def move_ids(ids, first, first_rows, tries, stream, points, clearance, polished,
 ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
                "select_all", "max_all", "touched_index_select", "gather_ids", "index_bound_ids", "index_fill_ids",
                "near_finish", "move_ids", "set_floats", "lower_floats", "split_mark",
-               "split_apply", "gather_rows", "index_clear", "index_insert_range")
+               "split_apply", "index_clear", "index_insert_range")
 THREADS_PER_BLOCK = 128
 
 

@@ -97,8 +97,7 @@ def top_order(ids: np.ndarray, clearance: np.ndarray, k: int) -> np.ndarray:
     if k <= 0:
         return np.empty(0, dtype=np.int64)
     if k < count // 2:
-        kth = np.partition(clearance, count - k)[count - k]
-        some = np.flatnonzero(clearance >= kth)  # the k largest, and any ties of the k-th
+        some = largest(clearance, k)
         return some[np.lexsort((ids[some], -clearance[some]))[:k]]
     return np.lexsort((ids, -clearance))[:k]
 
@@ -446,8 +445,8 @@ class DevicePrototypes(Prototypes):
         array of ``rows`` rows that begins with ``array``'s). Kinds are ``"float"``, ``"point"`` and
         ``"index"``. The kernels are ``max_all``, ``select_all``, ``touched_index_select``,
         ``gather_ids``, ``index_bound_ids``, ``index_fill_ids``, ``near_finish``, ``move_ids``,
-        ``set_floats``, ``lower_floats``, ``split_mark``, ``split_apply``, ``gather_rows``,
-        ``index_clear`` and ``index_insert_range`` of the backend's kernel text.
+        ``set_floats``, ``lower_floats``, ``split_mark``, ``split_apply``, ``index_clear`` and
+        ``index_insert_range`` of the backend's kernel text.
     spread : int
         Most threads per prototype in a move launch (a power of two; see :func:`lane_spread`):
         ``SPREAD_MAX`` on a GPU, 1 on a CPU device, where idle threads would be work.
@@ -601,9 +600,7 @@ class DevicePrototypes(Prototypes):
         out = [ids[order], values[order], None, None]
         if 2 in fields or 3 in fields:
             rows = len(ids)
-            d_points, d_flags = device.empty(rows, "point"), device.empty(rows, "index")
-            device.launch("gather_rows", rows, device.upload(out[0], "index"), self.d_points, self.d_polished,
-                          d_points, d_flags)
+            d_points, _, d_flags = self._gathered(out[0])
             points, flags = device.fetch((d_points, rows), (d_flags, rows))
             for field, value in ((2, points), (3, flags)):
                 out[field] = value if field in fields else None
@@ -675,12 +672,18 @@ class DevicePrototypes(Prototypes):
         count = len(ids)
         if count == 0:
             return np.empty((0, self.dim)), np.empty(0)
-        device = self.device
-        out_points, out_clearance = device.empty(count, "point"), device.empty(count, "float")
-        device.launch("gather_ids", count, device.upload(ids, "index"), self.d_points, self.d_clearance,
-                      out_points, out_clearance)
-        points, clearance = device.fetch((out_points, count), (out_clearance, count))
+        out_points, out_clearance, _ = self._gathered(ids)
+        points, clearance = self.device.fetch((out_points, count), (out_clearance, count))
         return points, clearance
+
+    def _gathered(self, ids):
+        """Device arrays of the points (k, d), clearances (k,) and polish flags (k,) of
+        prototypes ``ids`` (k,), gathered on the device."""
+        device, count = self.device, len(ids)
+        out = device.empty(count, "point"), device.empty(count, "float"), device.empty(count, "index")
+        device.launch("gather_ids", count, device.upload(ids, "index"), self.d_points, self.d_clearance,
+                      self.d_polished, *out)
+        return out
 
     def _tightened(self, d_ids, count, centers, radii, spread):
         """The spheres on the device, their index, and the tightened reach (k,) of the cells of

@@ -253,18 +253,12 @@ def select_all(count: int, clearance: wp.array(dtype=F), polished: wp.array(dtyp
 
 @wp.kernel
 def gather_ids(ids: wp.array(dtype=wp.int32), points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
-               out_points: wp.array(dtype=VecD), out_clearance: wp.array(dtype=F)):
+               polished: wp.array(dtype=wp.int32), out_points: wp.array(dtype=VecD), out_clearance: wp.array(dtype=F),
+               out_flags: wp.array(dtype=wp.int32)):
+    """The points, clearances and polish flags of prototypes ``ids``, as a selection appends them."""
     b = wp.tid()
     out_points[b] = points[ids[b]]
     out_clearance[b] = clearance[ids[b]]
-
-
-@wp.kernel
-def gather_rows(ids: wp.array(dtype=wp.int32), points: wp.array(dtype=VecD), polished: wp.array(dtype=wp.int32),
-                out_points: wp.array(dtype=VecD), out_flags: wp.array(dtype=wp.int32)):
-    """The points and polish flags of prototypes ``ids``, as a selection appends them."""
-    b = wp.tid()
-    out_points[b] = points[ids[b]]
     out_flags[b] = polished[ids[b]]
 
 
