@@ -28,3 +28,14 @@ print(f"warp, cuda: first packing of a mesh, cache empty: {first:.1f} s; the nex
 PY
   )
 }
+
+# kernels VERSION NAME ARGS...: bench/profile_kernels.py with VERSION's ndpack (now: this checkout; base:
+# .gpu2/base), unprofiled runs only, stages timed, the table to $OUT/NAME_VERSION.json.
+kernels() {
+  local version=$1 name=$2
+  shift 2
+  local path=$PYTHONPATH
+  [ "$version" = base ] && path=$PWD/.gpu2/base:$PYTHONPATH
+  PYTHONPATH=$path timeout 300 python3 bench/profile_kernels.py --stages --no-profiled \
+    --out "$OUT/${name}_${version}.json" "$@" 2>&1 | grep -v "^Warp\|^Module"
+}

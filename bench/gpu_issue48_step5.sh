@@ -22,16 +22,6 @@ source bench/gpu_header.sh
 [ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
 STEP=${STEP:-step5}
 export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
-# kernels VERSION NAME ARGS...: bench/profile_kernels.py with VERSION's ndpack (now: this checkout; base:
-# .gpu2/base), unprofiled runs only, stages timed, the table to $OUT/NAME_VERSION.json.
-kernels() {
-  local version=$1 name=$2
-  shift 2
-  local path=$PYTHONPATH
-  [ "$version" = base ] && path=$PWD/.gpu2/base:$PYTHONPATH
-  PYTHONPATH=$path timeout 300 python3 bench/profile_kernels.py --stages --no-profiled \
-    --out "$OUT/${name}_${version}.json" "$@" 2>&1 | grep -v "^Warp\|^Module"
-}
 case "${1:-}" in
   host)
     for count in 100000 1000000; do

@@ -18,7 +18,8 @@ cells down to R times the frontier on a GPU (``rounds.SPLIT_RATIO_AHEAD``); ``la
 mesh's tree cooperatively in move launches of at most N prototypes (``lanes-off``: never, in moves
 or the set-up's converge; ``converge-off``: not in the set-up's converge; the backend's
 ``cooperative_most`` and ``cooperative_converge_most``, see :mod:`ndpack.backends.warp_lanes`);
-``share-N``: the lanes agree on the best distance every N rounds (``cooperative_share``).
+``share-N``: the lanes agree on the best distance every N rounds (``cooperative_share``);
+``ahead-whole``: the polish ahead runs the whole polish schedule (``rounds.AHEAD_EPS_START``).
 Each variant's spheres are set beside the first variant's: their count and the largest change of
 a radius, sorted.
 Each variant is also timed unprofiled ``--repeats`` times (median). ``--host-profile`` prints
@@ -54,6 +55,8 @@ VARIANTS = {"now": {}, "no-ahead": {"launch_bound": False}, "spread-1": {"move_s
 THREAD_VARIANTS = {f"threads-2^{bits}": 1 << bits for bits in (15, 16, 18, 19, 20)}
 #: Variants that set the GPU's split ratio (``rounds.SPLIT_RATIO_AHEAD``) instead.
 SPLIT_VARIANTS = {f"split-{ratio:g}": ratio for ratio in (2.0, 2.5, 3.0, 4.0)}
+#: Variants that set where the polish ahead's schedule starts (``rounds.AHEAD_EPS_START``) instead.
+AHEAD_VARIANTS = {"ahead-whole": np.inf}
 
 #: Driver phases timed inclusively: (owner, attribute name).
 PHASES = [
@@ -203,7 +206,7 @@ def main():
     parser.add_argument("--mesh", default=None, help="a mesh file; default the unit cube (or --square)")
     parser.add_argument("--square", action="store_true", help="the unit square instead of the cube")
     parser.add_argument("--variants", nargs="+", default=["now"],
-                        choices=[*VARIANTS, *THREAD_VARIANTS, *SPLIT_VARIANTS])
+                        choices=[*VARIANTS, *THREAD_VARIANTS, *SPLIT_VARIANTS, *AHEAD_VARIANTS])
     parser.add_argument("--repeats", type=int, default=0, help="unprofiled runs per variant (median)")
     parser.add_argument("--host-profile", action="store_true", help="cProfile one unprofiled run of `now`")
     parser.add_argument("--stages", action="store_true",
@@ -222,6 +225,7 @@ def main():
         backend = get_backend(name)
         nd.pack(shape, 3, backend=backend, mode="fast")
         spread_threads, split_ahead = prototypes.SPREAD_THREADS, rounds.SPLIT_RATIO_AHEAD
+        ahead_start = getattr(rounds, "AHEAD_EPS_START", None)  # None: a checkout from before it
         defaults = {key: getattr(backend, key) for variant in VARIANTS.values() for key in variant
                     if hasattr(backend, key)}
         first_radii = None
@@ -230,6 +234,8 @@ def main():
                 setattr(backend, key, VARIANTS.get(variant, {}).get(key, value))
             prototypes.SPREAD_THREADS = THREAD_VARIANTS.get(variant, spread_threads)
             rounds.SPLIT_RATIO_AHEAD = SPLIT_VARIANTS.get(variant, split_ahead)
+            if ahead_start is not None:
+                rounds.AHEAD_EPS_START = AHEAD_VARIANTS.get(variant, ahead_start)
             timed, stages = [], {}
             for _ in range(args.repeats):
                 undo_stages = install_stages(stages, device_sync(backend)) if args.stages else (lambda: None)
@@ -281,6 +287,8 @@ def main():
         for key, value in defaults.items():
             setattr(backend, key, value)
         prototypes.SPREAD_THREADS, rounds.SPLIT_RATIO_AHEAD = spread_threads, split_ahead
+        if ahead_start is not None:
+            rounds.AHEAD_EPS_START = ahead_start
     if args.out:
         with open(args.out, "w") as file:
             json.dump(results, file, indent=1)

@@ -129,7 +129,7 @@ def split_mark(count, lower, upper, reach, points, clearance, bound, low, longes
                 out_values[slot] = b
 
 
-def split_apply(ids, lower, upper, reach, wall, points, clearance, polished, bound, prm, first_new, wall_slack):
+def split_cut(ids, lower, upper, reach, points, clearance, polished, first_new):
     b = cuda.grid(1)
     if b < ids.shape[0]:
         i = ids[b]
@@ -151,22 +151,29 @@ def split_apply(ids, lower, upper, reach, wall, points, clearance, polished, bou
         else:
             lower[i, axis] = middle
             upper[j, axis] = middle
-        parent = reach[i]
-        centre = point()
-        for row in (i, j):
-            half2 = 0.0
-            for k in range(D):
-                centre[k] = 0.5 * (lower[row, k] + upper[row, k])
-                side = upper[row, k] - lower[row, k]
-                half2 += side * side
-            distance = sd(centre, prm)
-            reach[row] = min(parent, -distance + 0.5 * math.sqrt(half2))
-            wall[row] = -distance - wall_slack
-            bound[row] = reach[row]
+        reach[j] = reach[i]
         for k in range(D):
-            points[j, k] = centre[k]
+            points[j, k] = 0.5 * (lower[j, k] + upper[j, k])
         clearance[j] = -math.inf
         polished[j] = 0
+
+
+def cell_distances(ids, count, first_new, lower, upper, reach, wall, bound, prm, wall_slack):
+    t = cuda.grid(1)
+    if t < 2 * count:
+        row = first_new + t - count
+        if t < count:
+            row = ids[t]
+        centre = point()
+        half2 = 0.0
+        for k in range(D):
+            centre[k] = 0.5 * (lower[row, k] + upper[row, k])
+            side = upper[row, k] - lower[row, k]
+            half2 += side * side
+        distance = sd(centre, prm)
+        reach[row] = min(reach[row], -distance + 0.5 * math.sqrt(half2))
+        wall[row] = -distance - wall_slack
+        bound[row] = reach[row]
 
 
 def gather_ids(ids, points, clearance, polished, out_points, out_clearance, out_flags):
@@ -256,7 +263,7 @@ def move_ids(ids, first, first_rows, tries, stream, points, clearance, polished,
 ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
                "select_all", "max_all", "touched_index_select", "gather_ids", "index_bound_ids", "index_fill_ids",
                "near_finish", "move_ids", "set_floats", "lower_floats", "split_mark",
-               "split_apply", "index_clear", "index_insert_range")
+               "split_cut", "cell_distances", "index_clear", "index_insert_range")
 THREADS_PER_BLOCK = 128
 
 

@@ -118,7 +118,7 @@ def cell_bounds(lower, upper, distance, wall_slack):
     inside each (the reach, which finds the spheres near the cell) (k,), and a lower bound of the
     boundary's distance at each centre less ``wall_slack`` for rounding (the wall) (k,); both from
     the centre's signed distance, ``distance(centres) -> (k,)``, which is 1-Lipschitz. The device
-    kernel ``split_apply`` computes the same."""
+    kernels ``split_cut`` and ``cell_distances`` compute the same."""
     centers = 0.5 * (lower + upper)
     centre_distance = distance(centers)
     half_diagonal = 0.5 * np.linalg.norm(upper - lower, axis=1)
@@ -445,7 +445,7 @@ class DevicePrototypes(Prototypes):
         array of ``rows`` rows that begins with ``array``'s). Kinds are ``"float"``, ``"point"`` and
         ``"index"``. The kernels are ``max_all``, ``select_all``, ``touched_index_select``,
         ``gather_ids``, ``index_bound_ids``, ``index_fill_ids``, ``near_finish``, ``move_ids``,
-        ``set_floats``, ``lower_floats``, ``split_mark``, ``split_apply``, ``index_clear`` and
+        ``set_floats``, ``lower_floats``, ``split_mark``, ``split_cut``, ``cell_distances``, ``index_clear`` and
         ``index_insert_range`` of the backend's kernel text.
     spread : int
         Most threads per prototype in a move launch (a power of two; see :func:`lane_spread`):
@@ -521,9 +521,12 @@ class DevicePrototypes(Prototypes):
         device, count, first = self.device, len(ids), self.count
         self._reserve(first + count)
         self.count += count
-        device.launch("split_apply", count, device.upload(ids, "index"), self.d_lower, self.d_upper, self.d_reach,
-                      self.d_wall, self.d_points, self.d_clearance, self.d_polished, self.d_bound, device.params, first,
-                      float(wall_slack))
+        d_ids = device.upload(ids, "index")
+        device.launch("split_cut", count, d_ids, self.d_lower, self.d_upper, self.d_reach, self.d_points,
+                      self.d_clearance, self.d_polished, first)
+        # A thread a half: each half's distance is a walk of the mesh's trees of its own.
+        device.launch("cell_distances", 2 * count, d_ids, count, first, self.d_lower, self.d_upper, self.d_reach,
+                      self.d_wall, self.d_bound, device.params, float(wall_slack))
         return np.arange(first, self.count)
 
     def add_cells(self, cell_lower, cell_upper, reach, wall):

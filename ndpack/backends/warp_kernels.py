@@ -573,13 +573,12 @@ def split_mark(count: int, lower: wp.array(dtype=VecD), upper: wp.array(dtype=Ve
 
 
 @wp.kernel
-def split_apply(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
-                reach: wp.array(dtype=F), wall: wp.array(dtype=F), points: wp.array(dtype=VecD),
-                clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32), bound: wp.array(dtype=F),
-                prm: wp.array(dtype=F), first_new: int, wall_slack: F):
+def split_cut(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
+              reach: wp.array(dtype=F), points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
+              polished: wp.array(dtype=wp.int32), first_new: int):
     """Cut cell ``ids[b]`` in two across its longest side (the first of equals); the half without
-    its prototype becomes row ``first_new + b``, with a new prototype at its centre (the host
-    store's ``split_cells``)."""
+    its prototype becomes row ``first_new + b``, with a new prototype at its centre and its
+    parent's reach, which :func:`cell_distances` tightens (the host store's ``split_cells``)."""
     b = wp.tid()
     i = ids[b]
     j = first_new + b
@@ -602,26 +601,35 @@ def split_apply(ids: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), uppe
     else:
         kept_lo[axis] = middle
         other_hi[axis] = middle
-    parent = reach[i]
-    kept_centre = F(0.5) * (kept_lo + kept_hi)
-    other_centre = F(0.5) * (other_lo + other_hi)
-    kept_distance = sd(kept_centre, prm)
-    other_distance = sd(other_centre, prm)
-    kept_reach = wp.min(parent, -kept_distance + F(0.5) * wp.length(kept_hi - kept_lo))
-    other_reach = wp.min(parent, -other_distance + F(0.5) * wp.length(other_hi - other_lo))
     lower[i] = kept_lo
     upper[i] = kept_hi
-    reach[i] = kept_reach
-    wall[i] = -kept_distance - wall_slack
-    bound[i] = kept_reach
     lower[j] = other_lo
     upper[j] = other_hi
-    reach[j] = other_reach
-    wall[j] = -other_distance - wall_slack
-    bound[j] = other_reach
-    points[j] = other_centre
+    reach[j] = reach[i]
+    points[j] = F(0.5) * (other_lo + other_hi)
     clearance[j] = -F(wp.inf)
     polished[j] = 0
+
+
+@wp.kernel
+def cell_distances(ids: wp.array(dtype=wp.int32), count: int, first_new: int, lower: wp.array(dtype=VecD),
+                   upper: wp.array(dtype=VecD), reach: wp.array(dtype=F), wall: wp.array(dtype=F),
+                   bound: wp.array(dtype=F), prm: wp.array(dtype=F), wall_slack: F):
+    """Bound the cells cut by :func:`split_cut` by their centres' signed distances (the host's
+    ``cell_bounds``): row ``ids[t]`` for ``t < count``, row ``first_new + t - count`` after; its
+    reach (never above what it was), wall and split bound. A thread a half: the two halves'
+    distances, each a walk of the mesh's trees, are not one chain."""
+    t = wp.tid()
+    row = first_new + t - count
+    if t < count:
+        row = ids[t]
+    lo = lower[row]
+    hi = upper[row]
+    distance = sd(F(0.5) * (lo + hi), prm)
+    bounded = wp.min(reach[row], -distance + F(0.5) * wp.length(hi - lo))
+    reach[row] = bounded
+    wall[row] = -distance - wall_slack
+    bound[row] = bounded
 
 
 @wp.func

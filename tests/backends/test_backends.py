@@ -434,10 +434,13 @@ def test_small_fast_mode_on_the_device_store_equals_host_store(name):
 @pytest.mark.parametrize("name", [name for name in ("numba", *DEVICE_STORES) if not SIMULATED or name == "numba"])
 def test_fast_mode_polishing_ahead(name, monkeypatch):
     """A launch-bound backend (a GPU) ends each fast round by polishing every unpolished
-    prototype above POLISH_AHEAD of the frontier: none is left after a round; the packing is
+    prototype above POLISH_AHEAD of the frontier, with the polish schedule's tail: none is left
+    after a round; the packing is
     valid, its fill within 0.5% of polishing only the chosen; a device store gives the host
     store's packing."""
+    from ndpack.backends.prototypes import PolishAhead
     from ndpack.drivers.greedy import rounds
+    from ndpack.drivers.greedy.protosphere import schedules as schedules_of
 
     shape = nd.Box([0.0, 0.0], [1.0, 1.0]) - nd.Ball([0.3, 0.4], 0.2)
     left = []
@@ -448,6 +451,8 @@ def test_fast_mode_polishing_ahead(name, monkeypatch):
         left.append(len(state.prototypes.select(low=rounds.POLISH_AHEAD * self.frontier, unpolished=True)[0]))
 
     monkeypatch.setattr(rounds.Fast, "after_round", checked)
+    schedules = []  # the polish ahead's, each round's
+    monkeypatch.setattr(rounds, "PolishAhead", lambda steps, *a: schedules.append(steps) or PolishAhead(steps, *a))
     backend = backends.get_backend(name)
     saved = backend.launch_bound
     try:
@@ -456,6 +461,11 @@ def test_fast_mode_polishing_ahead(name, monkeypatch):
     finally:
         backend.launch_bound = saved
     assert packing.params["polish_ahead"] == rounds.POLISH_AHEAD and len(left) > 5 and max(left) == 0
+    # The polish ahead runs the polish schedule's tail only, from AHEAD_EPS_START down.
+    polish = schedules_of("fast", 50)[1]
+    assert len(schedules) == len(left) and packing.params["polish_ahead_eps_start"] == rounds.AHEAD_EPS_START
+    assert all(np.array_equal(steps, polish[polish <= rounds.AHEAD_EPS_START]) for steps in schedules)
+    assert 0 < len(schedules[0]) < len(polish) and schedules[0][0] <= rounds.AHEAD_EPS_START < polish[0]
     plain = nd.pack(shape, 150, grid=8, mode="fast", backend="numba")
     assert plain.params["polish_ahead"] is None and abs(packing.fill / plain.fill - 1) < 0.005
     if name != "numba" and str(getattr(backend, "device", "cpu")) == "cpu":

@@ -43,6 +43,7 @@ from ...shapes.plugin import check_plugin_slopes
 from ...verify import DEFAULT_TOLERANCE, overlapping_pairs, verify
 from ..sizes import SizeDistribution
 from .rounds import (
+    AHEAD_EPS_START,
     FAST_WINDOW,
     MAX_PROTOTYPES,
     POLISH_AHEAD,
@@ -799,7 +800,8 @@ def pack(
     if obstacles is not None:
         params["obstacles"] = len(obstacles[1])
     if mode == "fast":
-        params.update(fast_eps_end=FAST_EPS_END, fast_polish_eps_end=FAST_POLISH_EPS_END, polish_ahead=polish_ahead)
+        params.update(fast_eps_end=FAST_EPS_END, fast_polish_eps_end=FAST_POLISH_EPS_END, polish_ahead=polish_ahead,
+                      polish_ahead_eps_start=None if polish_ahead is None else AHEAD_EPS_START)
 
     def strategy(state):
         return Fast(state, ratio=ratio, polish_ahead=polish_ahead) if mode == "fast" else Faithful(int(batch))
@@ -989,7 +991,8 @@ def pack_sizes(
     params = dict(
         n=int(count), distribution=distribution.description, solid_fraction=solid_fraction, time_budget=time_budget,
         mode="sized", size_band=SIZE_BAND, fast_eps_end=FAST_EPS_END, fast_polish_eps_end=FAST_POLISH_EPS_END,
-        polish_ahead=polish_ahead, **_run_params(shape, backend, counts, iterations, restarts, seed, centers_only),
+        polish_ahead=polish_ahead, polish_ahead_eps_start=None if polish_ahead is None else AHEAD_EPS_START,
+        **_run_params(shape, backend, counts, iterations, restarts, seed, centers_only),
     )
     params["split_ratio"] = ratio
 

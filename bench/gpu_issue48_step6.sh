@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# Issue 48, sixth step (a move launch's chain: the polish ahead runs the polish schedule's tail,
+# rounds.AHEAD_EPS_START; the split's two signed distances on a thread each, split_cut and
+# cell_distances), on the GPU machine after the set-up runs (../shared/device/README.md):
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step6.sh measure  this checkout against the one in
+#        .gpu2/base (BASE, the commit before the step: git archive BASE ndpack | tar x -C .gpu2/base), in one
+#        run: a fresh machine's first packing of a mesh; the armadillo at 100,000 (3 runs each, and this
+#        checkout with the whole polish schedule ahead, variant ahead-whole; numba on the host's cores beside
+#        them), at 1,000,000 (2 runs each), the unit cube at 1,000,000 (2 runs each) and the unit square at
+#        1,000,000 (2 runs); the spheres side by side; the files in one archive, $OUT/measure_CARD_issue48_step6.tgz
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step6.sh numba    numba on the host's cores: the unit cube
+#        and square at 1,000,000 (one run each), for the ratios beside the measure's Warp figures
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step6.sh profile  the armadillo at 100,000 with every launch
+#        timed (and 3 unprofiled runs, stages timed): what bench/work_model.py --against sets its counts beside
+set -uo pipefail
+source bench/gpu_header.sh
+[ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
+STEP=step6
+export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
+case "${1:-}" in
+  measure)
+    [ -d .gpu2/base/ndpack ] || { echo "measure: .gpu2/base/ndpack is missing" >&2; exit 2; }
+    FINAL=$OUT
+    OUT=/tmp/measure && mkdir -p $OUT && cp "$FINAL/gpu.txt" $OUT/
+    cold_first_packing "$OUT/compile_${CARD}_issue48_${STEP}.txt"
+    kernels base "armadillo_100k_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj \
+      --count 100000 --repeats 3 --spheres /tmp/armadillo_100k_base.npz
+    kernels now "armadillo_100k_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj \
+      --count 100000 --repeats 3 --variants now ahead-whole --spheres /tmp/armadillo_100k_now.npz
+    kernels now "armadillo_100k_${CARD}host_numba_issue48_${STEP}" --backends numba --mesh /tmp/armadillo.obj \
+      --count 100000 --repeats 3
+    for version in base now; do
+      kernels $version "armadillo_1m_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj \
+        --count 1000000 --repeats 2 --spheres /tmp/armadillo_1m_$version.npz
+      kernels $version "cube_1m_${CARD}_issue48_${STEP}" --backends warp --count 1000000 --repeats 2 \
+        --spheres /tmp/cube_1m_$version.npz
+    done
+    kernels now "square_1m_${CARD}_issue48_${STEP}" --backends warp --square --count 1000000 --repeats 2
+    python3 - <<'PY' | tee "$OUT/same_spheres_${CARD}_issue48_${STEP}.txt"
+import numpy as np
+for case in ("armadillo_100k", "armadillo_1m", "cube_1m"):
+    base, now = (np.load(f"/tmp/{case}_{v}.npz") for v in ("base", "now"))
+    same = len(base["radii"]) == len(now["radii"])
+    change = float(np.abs(base["radii"] - now["radii"]).max()) if same else None
+    print(f"{case}, base against now: spheres {len(base['radii'])} and {len(now['radii'])}, "
+          f"largest radius change {change}; volume {np.sum(base['radii'] ** 3):.6g} and {np.sum(now['radii'] ** 3):.6g}")
+PY
+    tar czf "$FINAL/measure_${CARD}_issue48_${STEP}.tgz" -C $OUT .
+    ;;
+  numba)
+    kernels now "cube_1m_${CARD}host_numba_issue48_${STEP}" --backends numba --count 1000000 --repeats 1
+    kernels now "square_1m_${CARD}host_numba_issue48_${STEP}" --backends numba --square --count 1000000 --repeats 1
+    ;;
+  profile)
+    timeout 300 python3 bench/profile_kernels.py --backends warp --mesh /tmp/armadillo.obj --count 100000 \
+      --repeats 3 --stages --out "$OUT/profile_kernels_${CARD}_armadillo_issue48_${STEP}.json" 2>&1 \
+      | grep -v "^Warp\|^Module\|^ndpack: compiling" | tail -30
+    ;;
+  *) echo "usage: bash bench/gpu_issue48_step6.sh measure|numba|profile" >&2; exit 2 ;;
+esac
