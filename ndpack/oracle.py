@@ -424,20 +424,29 @@ def check_packable(shape: Oracle, samples_per_face: int = 512, seed: int = 0) ->
     lower, upper = bounds
     tolerance = 1e-9 * shape.scale
     period = getattr(shape, "period", None)
+    faces = []
     for axis in range(shape.dim):
         if period is not None and period.axes[axis]:
             continue  # the faces of a periodic axis wrap around: they cut nothing
         for side in (lower, upper):
             points = lower + (upper - lower) * rng.random((samples_per_face, shape.dim))
             points[:, axis] = side[axis]
-            distances = shape._distance(points)
-            worst = int(np.argmin(distances))
-            if distances[worst] < -tolerance:
-                raise BoundsError(
-                    f"the bounds of {shape!r} do not enclose it: the point "
-                    f"{np.round(points[worst], 6).tolist()} on the bounding box is inside "
-                    f"(distance {distances[worst]:.3g}); enlarge the bounds"
-                )
+            faces.append(points)
+    if not faces:
+        return
+    # One query for every face: a mesh's costs about the same for 512 points as for 6 x 512.
+    points = np.concatenate(faces)
+    distances = shape._distance(points)
+    inside = np.flatnonzero(distances < -tolerance)
+    if len(inside):
+        face = slice(inside[0] // samples_per_face * samples_per_face, (inside[0] // samples_per_face + 1) *
+                     samples_per_face)  # the first face with a point inside, as face by face
+        worst = face.start + int(np.argmin(distances[face]))
+        raise BoundsError(
+            f"the bounds of {shape!r} do not enclose it: the point "
+            f"{np.round(points[worst], 6).tolist()} on the bounding box is inside "
+            f"(distance {distances[worst]:.3g}); enlarge the bounds"
+        )
 
 
 def check_finite(values: np.ndarray, points: np.ndarray, what: str) -> np.ndarray:
