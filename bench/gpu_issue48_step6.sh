@@ -15,7 +15,7 @@
 set -uo pipefail
 source bench/gpu_header.sh
 [ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
-STEP=step6
+STEP=${STEP:-step6}  # another name for a second run of the same step
 export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
 case "${1:-}" in
   measure)
