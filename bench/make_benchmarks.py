@@ -87,6 +87,30 @@ SOURCES = {
        for name, mode in [("profile_kernels_h200_armadillo_issue48_step4.json", "lanes"),
                           ("profile_kernels_h200host_numba_armadillo_issue48_step4.json", "lanes"),
                           ("million_h200_armadillo_issue48_step4.json", "million")]},
+    # Issue 48's sixth step (a move launch's chain): bench/gpu_issue48_step6.sh on one H100 lease, two runs:
+    # af1a36d against bf23c2a (STEP=step6), then bf23c2a against c93efeb (STEP=step6b), then c93efeb alone.
+    **{f"{case}_h100_issue48_step6_base.json": Source(
+        "H100, NumPy 2.5", "af1a36d", "bash bench/gpu_issue48_step6.sh measure", "2026-11-27")
+       for case in ("armadillo_100k", "armadillo_1m", "cube_1m")},
+    **{name: Source("H100, NumPy 2.5", "bf23c2a", command, "2026-11-27") for name, command in [
+        *[(f"{case}_h100_issue48_step6_now.json", "bash bench/gpu_issue48_step6.sh measure")
+          for case in ("armadillo_100k", "armadillo_1m", "cube_1m")],
+        *[(f"{case}_h100_issue48_step6b_base.json", "STEP=step6b bash bench/gpu_issue48_step6.sh measure")
+          for case in ("armadillo_100k", "armadillo_1m", "cube_1m")],
+        ("profile_kernels_h100_armadillo_issue48_step6.json", "bash bench/gpu_issue48_step6.sh profile")]},
+    **{name: Source("H100, NumPy 2.5", "c93efeb", command, "2026-11-27") for name, command in [
+        *[(f"{case}_issue48_step6b_now.json", "STEP=step6b bash bench/gpu_issue48_step6.sh measure")
+          for case in ("armadillo_100k_h100", "armadillo_100k_h100host_numba", "armadillo_1m_h100", "cube_1m_h100",
+                       "square_1m_h100")],
+        *[(f"{case}_1m_h100host_numba_issue48_step6b_now.json", "STEP=step6b bash bench/gpu_issue48_step6.sh numba")
+          for case in ("cube", "square")],
+        ("armadillo_100k_h100_issue48_step6_repeats_now.json", "python3 bench/profile_kernels.py --backends warp "
+         "--mesh armadillo.obj --count 100000 --repeats 7 --stages --no-profiled")]},
+    "ahead_tail_2core.json": Source("2 cores", "bf23c2a", "python bench/ahead_tail.py"),
+    "work_model_2core_armadillo_100k_issue48_step6.json": Source(
+        "2 cores", "c93efeb", "python bench/work_model.py --mesh armadillo.obj --count 100000 --against "
+        "bench/results/profile_kernels_h100_armadillo_issue48_step6.json --constants "
+        "bench/results/work_model_2core_armadillo_100k_issue48_step5.json"),
     # Issue 48's fifth step (the host's part of a round): bench/gpu_issue48_step5.sh final on an H100, and
     # measure on an H200 (this code against main before, 49cef62, in one run).
     **{name: Source("H100, NumPy 2.5", "d7c0654", "bash bench/gpu_issue48_step5.sh final", "2026-11-27")
@@ -347,30 +371,36 @@ def scale_h100() -> list[str]:
     model4 = load("work_model_2core_armadillo_100k_issue48_step4.json")
     cold = {card: float(re.search(r"cache empty: ([0-9.]+) s", (RESULTS / f"compile_{card}_issue48_step4.txt")
                                   .read_text())[1]) for card in ("h100", "h200")}
-    h100 = load("profile_kernels_h100_armadillo_issue48_step4.json")
-    h100_1m = load("million_h100_armadillo_issue48_step4.json")
-    step5 = {name: load(f"{name}_issue48_step5_now.json") for name in (
+    step6 = {name: load(f"{name}_issue48_step6b_now.json") for name in (
         "armadillo_100k_h100", "armadillo_100k_h100host_numba", "armadillo_1m_h100", "cube_1m_h100",
         "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")}
-    arm5, arm5_cpu, arm5_1m = (step5[name][key] for name, key in [
-        ("armadillo_100k_h100", "warp"), ("armadillo_100k_h100host_numba", "numba"), ("armadillo_1m_h100", "warp")])
-    cube_1m, cube_1m_cpu = step5["cube_1m_h100"]["warp"], step5["cube_1m_h100host_numba"]["numba"]
-    square_1m, square_1m_cpu = step5["square_1m_h100"]["warp"], step5["square_1m_h100host_numba"]["numba"]
-    step5_files = [f"{name}_issue48_step5_now.json" for name in step5] + [
-        f"{case}_h200_issue48_step5_{version}.json" for version in ("base", "now")
-        for case in ("armadillo_100k", "armadillo_1m", "cube_1m")]
-    host_part = {(case, version): load(f"{case}_h200_issue48_step5_{version}.json")
-                 for case in ("armadillo_100k", "armadillo_1m", "cube_1m") for version in ("base", "now")}
-    cold5 = float(re.search(r"cache empty: ([0-9.]+) s", (RESULTS / "compile_h100_issue48_step5.txt").read_text())[1])
-    peak5 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
-                            (RESULTS / "memory_h100_issue48_step5.txt").read_text()))
+    arm5_cpu, arm5_1m = (step6[name][key] for name, key in [
+        ("armadillo_100k_h100host_numba", "numba"), ("armadillo_1m_h100", "warp")])
+    arm5 = load("armadillo_100k_h100_issue48_step6_repeats_now.json")["warp"]  # 7 runs, after the numba ones
+    cube_1m, cube_1m_cpu = step6["cube_1m_h100"]["warp"], step6["cube_1m_h100host_numba"]["numba"]
+    square_1m, square_1m_cpu = step6["square_1m_h100"]["warp"], step6["square_1m_h100host_numba"]["numba"]
+    repeats6 = load("armadillo_100k_h100_issue48_step6_repeats_now.json")["warp"]
+    chain = {(case, version): load(f"{case}_h100_issue48_step6_{version}.json")
+             for case in ("armadillo_100k", "armadillo_1m", "cube_1m") for version in ("base", "now")}
+    chain[("armadillo_100k", "base6b")] = load("armadillo_100k_h100_issue48_step6b_base.json")
+    tail = load("ahead_tail_2core.json")["rows"]
+    tail_fill = {(row["shape"], row["start"]): row["fill"] for row in tail}
+    peak6 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
+                            (RESULTS / "memory_h100_issue48_step6.txt").read_text()))
+    cold6 = float(re.search(r"cache empty: ([0-9.]+) s", (RESULTS / "compile_h100_issue48_step6b.txt").read_text())[1])
+    step6_files = [f"{case}_h100_issue48_step6_base.json" for case in ("armadillo_100k", "armadillo_1m", "cube_1m")]
+    step6_files += [f"{case}_h100_issue48_step6_now.json" for case in ("armadillo_100k", "armadillo_1m", "cube_1m")]
+    step6_files += [f"{case}_h100_issue48_step6b_base.json" for case in ("armadillo_100k", "armadillo_1m", "cube_1m")]
+    step6_files += ["profile_kernels_h100_armadillo_issue48_step6.json"]
+    step6_files += [f"{name}_issue48_step6b_now.json" for name in step6]
+    step6_files += ["armadillo_100k_h100_issue48_step6_repeats_now.json", "ahead_tail_2core.json",
+                    "work_model_2core_armadillo_100k_issue48_step6.json"]
+
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
     before = load("profile_kernels_h100_armadillo_issue48_before.json")["warp"]
     model = load("work_model_2core_armadillo_100k_issue48_step2.json")
     gpu, predicted = model["against"], model["prediction"]
     fill = {(row["shape"], row["run"]): row["fill"] for row in load("policy_fill_2core_10k.json")["rows"]}
-    # Measured before ndpack set a level: "default" is Warp's own (3), "O2" ndpack's now.
-    optimised = {row["variant"]: row for row in load("compile_options_h100_issue48.json")["rows"]}
 
     def parts(run):
         stages, device = run["stages"], run["device"]
@@ -381,6 +411,9 @@ def scale_h100() -> list[str]:
     names = ["set-up", "move launches", "other launches", "host, in the rounds", "final check", "whole call"]
     guess = [predicted["setup"], predicted["moves"], predicted["other_launches"], predicted["host"],
              predicted["verify"], predicted["seconds"]]
+    model6 = load("work_model_2core_armadillo_100k_issue48_step6.json")
+    arm6_profiled = load("profile_kernels_h100_armadillo_issue48_step6.json")["warp"]
+    guess6 = [model6["prediction"][key] for key in ("setup", "moves", "other_launches", "host", "verify", "seconds")]
     model5 = load("work_model_2core_armadillo_100k_issue48_step5.json")
     arm5_profiled = load("profile_kernels_h200_armadillo_issue48_step5.json")["warp"]
     predicted5 = model5["prediction"]
@@ -389,20 +422,21 @@ def scale_h100() -> list[str]:
     guess4 = [predicted4["setup"], predicted4["moves"], predicted4["other_launches"], predicted4["host"],
               predicted4["verify"], predicted4["seconds"]]
     split = [[name, seconds(old), seconds(new), seconds(model_), seconds(new4), seconds(model4_), seconds(new5),
-              seconds(model5_)]
-             for name, old, new, model_, new4, model4_, new5, model5_ in zip(
-                 names, parts(before), parts(arm), guess, parts(arm3), guess4, parts(arm5_profiled), guess5)]
+              seconds(model5_), seconds(new6), seconds(model6_)]
+             for name, old, new, model_, new4, model4_, new5, model5_, new6, model6_ in zip(
+                 names, parts(before), parts(arm), guess, parts(arm3), guess4, parts(arm5_profiled), guess5,
+                 parts(arm6_profiled), guess6)]
     rows = [
         ["armadillo (100k triangles)", "100,000", seconds(arm5["median"]), "", seconds(arm5_cpu["median"]),
-         f"{arm5['fill']:.4f}", "medians of 3, d7c0654"],
+         f"{arm5['fill']:.4f}", "median of 7 (numba: 3), c93efeb"],
         ["unit cube", "100,000", *[seconds(median_of(cube, backend=b)) for b in ("warp", "numba-cuda", "numba")],
          f"{median_of(cube, 'fill', backend='warp'):.4f}", "medians of 2, 4ea141e"],
         ["armadillo (100k triangles)", "1,000,000", seconds(arm5_1m["median"]), "", "",
-         f"{arm5_1m['fill']:.4f}", "median of 2, d7c0654"],
+         f"{arm5_1m['fill']:.4f}", "median of 2, c93efeb"],
         ["unit cube", "1,000,000", seconds(cube_1m["median"]), "", seconds(cube_1m_cpu["median"]),
-         f"{cube_1m['fill']:.4f}", "median of 2 (numba: 1), d7c0654"],
+         f"{cube_1m['fill']:.4f}", "median of 2 (numba: 1), c93efeb"],
         ["unit square", "1,000,000", seconds(square_1m["median"]), "", seconds(square_1m_cpu["median"]),
-         f"{square_1m['fill']:.4f}", "median of 2 (numba: 1), d7c0654"],
+         f"{square_1m['fill']:.4f}", "median of 2 (numba: 1), c93efeb"],
         ["unit cube", "10,000,000", seconds(warp_10m["seconds"]), "", "", f"{warp_10m['fill']:.4f}",
          "one run, e7f6fee"],
     ]
@@ -428,7 +462,8 @@ def scale_h100() -> list[str]:
         f"(`bench/work_model.py`; same launches: {'yes' if gpu['same_launches'] else 'no'}):",
         "",
         *table(["stage", "H100, before (e08d8b4)", "H100, 3ffe337", "predicted", "H200, cooperative (39d016d)",
-                "predicted (5d70ad2's constants)", "H200, the host's part (d7c0654)", "predicted (39d016d's)"],
+                "predicted (5d70ad2's constants)", "H200, the host's part (d7c0654)", "predicted (39d016d's)",
+                "H100, a launch's chain (bf23c2a)", "predicted (d7c0654's)"],
                split),
         f"A move launch lasts as long as its slowest thread's chain ({1e6 * gpu['seconds_per_critical_node']:.2f} us a "
         f"node); the host's round takes {gpu['host_over_cpu']:.1f}x its 2-core time. The final check finds overlaps in "
@@ -436,49 +471,48 @@ def scale_h100() -> list[str]:
         "rounds, but took 2.72 s, not 2.07 s ([output](../bench/results/split_ratio_h100_issue48.txt)).",
         f"**Cooperative walks**: a block of 32 threads walks one prototype's mesh tree (worst query "
         f"{walk['serial_nodes_most']:,.0f} nodes, {walk['32: rounds_most']:.0f} rounds), in move launches of at most "
-        "4,096 prototypes and the set-up's converge. Without, the H100 took "
-        f"{seconds(h100['warp lanes-off']['median'])} at 100,000 (device {seconds(h100['warp lanes-off']['device'])}, "
-        f"with {seconds(h100['warp now']['device'])}; "
-        f"without in the set-up {seconds(h100['warp converge-off']['median'])}) and "
-        f"{seconds(h100_1m['warp lanes-off']['median'])} at a million (no gain there). An H200 took "
+        "4,096 prototypes and the set-up's converge. An H200 took "
         f"{seconds(arm3['median'])} at 100,000 (without {seconds(arm3_off['median'])}; without in the set-up "
         f"{seconds(converge_off['median'])}; numba on its host {seconds(arm3_cpu['median'])}) and "
         f"{seconds(arm3_1m['warp now']['median'])} at a million (without "
         f"{seconds(arm3_1m['warp lanes-off']['median'])}). "
         f"The model's moves (H200): {seconds(predicted4['moves'])} predicted, {seconds(parts(arm3)[1])} measured; its "
-        "set-up is the constants' run's, before the cooperative set-up. A fresh machine's first packing of a mesh on "
-        f"Warp, caches empty, took {optimised['default']['first_packing_s']:.0f} s at Warp's default optimisation "
-        f"(the notices said 15, 30, 12 s), {optimised['O2']['first_packing_s']:.1f} s at level 2 "
-        f"(H100; packing {optimised['default']['median_s']:.2f} and {optimised['O2']['median_s']:.2f} s); with the "
-        f"cooperative module to compile too, {cold['h100']:.1f} s (H100) and {cold['h200']:.1f} s (H200) "
+        "set-up is the constants' run's, before the cooperative set-up. A fresh machine's first packing of a mesh, "
+        f"with the cooperative module to compile too: {cold['h100']:.1f} s (H100) and {cold['h200']:.1f} s (H200) "
         "([output](../bench/results/compile_h100_issue48_step4.txt)).",
-        "**The host's part of a round** (fifth step): the sphere index built on the device (no serial insert, no "
-        "copy of every bucket head), the conflict check's pairs in a sorted grid, and only the most a round takes "
-        "of its window and of the cells that may split copied back and sorted. On an H200, in one run against "
-        "49cef62: the armadillo at 100,000 "
+        "**A move launch's chain** (sixth step): the polish ahead runs the polish schedule's tail, from eps 3e-4 "
+        f"({tail[2]['polish_steps']} of its {tail[0]['polish_steps']} steps; with a GPU's policies on 2 cores the "
+        f"cube at 10,000 filled {tail_fill[('unit cube', 3e-4)]:.5f} against {tail_fill[('unit cube', None)]:.5f} "
+        f"with the whole schedule, the armadillo at 100,000 {tail_fill[('armadillo (100k triangles)', 3e-4)]:.5f} "
+        f"against {tail_fill[('armadillo (100k triangles)', None)]:.5f}: `python bench/ahead_tail.py`), a split's "
+        "two signed distances are a thread each, and a call's fixed costs (the cooling schedules computed once, the "
+        "bounds check in one query) are gone. On one H100 lease, against af1a36d: the armadillo at 100,000 "
         + ", at a million ".join(
-            f"{seconds(host_part[(case, 'base')]['warp']['median'])} before, "
-            f"{seconds(host_part[(case, 'now')][key]['median'])} after" for case, key in
-            [("armadillo_100k", "warp"), ("armadillo_1m", "warp now")])
-        + f" (without polishing ahead {seconds(host_part[('armadillo_1m', 'now')]['warp no-ahead']['median'])}), the "
-        f"cube at a million {seconds(host_part[('cube_1m', 'base')]['warp']['median'])} before, "
-        f"{seconds(host_part[('cube_1m', 'now')]['warp']['median'])} after; the same spheres to the bit "
-        "([output](../bench/results/same_spheres_h200_issue48_step5.txt); the host's profiles: "
-        "[before](../bench/results/host_h200_armadillo_1000000_issue48_step5_before.txt), "
-        "[after, H100](../bench/results/host_h100_armadillo_1000000_issue48_step5.txt)). A fresh H100's first "
-        f"packing of a mesh: {cold5:.1f} s ([output](../bench/results/compile_h100_issue48_step5.txt)); its peak "
-        f"memory at a million (whole device, `bash bench/gpu_issue48_step5.sh memory`): the armadillo "
-        f"{int(peak5['armadillo']):,} MiB, the cube {int(peak5['cube']):,} MiB "
-        "([output](../bench/results/memory_h100_issue48_step5.txt)).",
-        *sources(*step5_files, "profile_kernels_h100_armadillo_issue48_step2.json",
+            f"{seconds(chain[(case, 'base')]['warp']['median'])} before, "
+            f"{seconds(chain[(case, 'now')][key]['median'])} after" for case, key in
+            [("armadillo_100k", "warp now"), ("armadillo_1m", "warp")])
+        + " (the whole schedule ahead, same process: "
+        f"{seconds(chain[('armadillo_100k', 'now')]['warp ahead-whole']['median'])}), "
+        f"the cube at a million {seconds(chain[('cube_1m', 'base')]['warp']['median'])} before, "
+        f"{seconds(chain[('cube_1m', 'now')]['warp']['median'])} after; then without the fixed costs "
+        "(c93efeb against bf23c2a, the same spheres to the bit, "
+        "[output](../bench/results/same_spheres_h100_issue48_step6b.txt)): "
+        f"{seconds(step6['armadillo_100k_h100']['warp now']['median'])} against "
+        f"{seconds(chain[('armadillo_100k', 'base6b')]['warp']['median'])} at 100,000, and 7 more runs "
+        f"a median of {seconds(repeats6['median'])} "
+        f"({min(repeats6['unprofiled']):.2f}-{max(repeats6['unprofiled']):.2f} s; the table's). "
+        f"A fresh H100's first packing of a mesh: {cold6:.1f} s "
+        "([output](../bench/results/compile_h100_issue48_step6b.txt)); "
+        "its peak memory at a million (whole device, `STEP=step6 bash bench/gpu_issue48_step5.sh memory`): the "
+        f"armadillo {int(peak6['armadillo']):,} MiB, the cube {int(peak6['cube']):,} MiB "
+        "([output](../bench/results/memory_h100_issue48_step6.txt)).",
+        *sources(*step6_files, "profile_kernels_h100_armadillo_issue48_step2.json",
                  "profile_kernels_h100host_numba_armadillo_issue48_step2.json",
                  "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
                  "work_model_2core_armadillo_100k_issue48_before.json",
                  "work_model_2core_armadillo_100k_issue48_step2.json", "policy_fill_2core_10k.json",
-                 "compile_options_h100_issue48.json", "profile_kernels_h100_armadillo_issue48_step4.json",
-                 "profile_kernels_h100host_numba_armadillo_issue48_step4.json",
-                 "million_h100_armadillo_issue48_step4.json", "profile_kernels_h200_armadillo_issue48_step4.json",
+                 "profile_kernels_h200_armadillo_issue48_step4.json",
                  "profile_kernels_h200host_numba_armadillo_issue48_step4.json",
                  "million_h200_armadillo_issue48_step4.json", "profile_kernels_h200_armadillo_issue48_step3.json",
                  "cooperative_walk_2core_armadillo.json", "work_model_2core_armadillo_100k_issue48_step3.json",
