@@ -10,6 +10,9 @@
 #        1,000,000 (2 runs); the spheres side by side; the files in one archive, $OUT/measure_CARD_issue48_step6.tgz
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step6.sh numba    numba on the host's cores: the unit cube
 #        and square at 1,000,000 (one run each), for the ratios beside the measure's Warp figures
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step6.sh split    finer cells on a GPU (rounds.SPLIT_RATIO_AHEAD,
+#        profile_kernels' split-R variants) in one process each: the armadillo at 100,000 (3 runs of 4, 3 and 2.5)
+#        and at 1,000,000 (2 runs of 4 and 3), the unit cube at 1,000,000 (2 runs of 4 and 3)
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step6.sh profile  the armadillo at 100,000 with every launch
 #        timed (and 3 unprofiled runs, stages timed): what bench/work_model.py --against sets its counts beside
 set -uo pipefail
@@ -51,10 +54,18 @@ PY
     kernels now "cube_1m_${CARD}host_numba_issue48_${STEP}" --backends numba --count 1000000 --repeats 1
     kernels now "square_1m_${CARD}host_numba_issue48_${STEP}" --backends numba --square --count 1000000 --repeats 1
     ;;
+  split)
+    kernels now "split_armadillo_100k_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj \
+      --count 100000 --repeats 3 --variants now split-3 split-2.5
+    kernels now "split_armadillo_1m_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj \
+      --count 1000000 --repeats 2 --variants now split-3
+    kernels now "split_cube_1m_${CARD}_issue48_${STEP}" --backends warp --count 1000000 --repeats 2 \
+      --variants now split-3
+    ;;
   profile)
     timeout 300 python3 bench/profile_kernels.py --backends warp --mesh /tmp/armadillo.obj --count 100000 \
       --repeats 3 --stages --out "$OUT/profile_kernels_${CARD}_armadillo_issue48_${STEP}.json" 2>&1 \
       | grep -v "^Warp\|^Module\|^ndpack: compiling" | tail -30
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step6.sh measure|numba|profile" >&2; exit 2 ;;
+  *) echo "usage: bash bench/gpu_issue48_step6.sh measure|numba|split|profile" >&2; exit 2 ;;
 esac
