@@ -143,7 +143,8 @@ def best_start(x, g, starts, tries, cell, row, lower, upper, wall, prm, centers,
         for t in range(tries):
             for k in range(D):
                 g[k] = starts[t, row, k]
-            c = nearest_obstacle(g, prm, centers, radii, nbr, row, wall_floor(g, lower, upper, wall, cell), -1.0)[0]
+            c = nearest_obstacle(g, prm, centers, radii, nbr, row, max(wall_floor(g, lower, upper, wall, cell), top),
+                                 -1.0)[0]  # the best so far floors the bound, as in move_one
             if c > top:
                 top = c
                 for k in range(D):
@@ -239,7 +240,11 @@ def move_one(b, ids, first, first_rows, tries, stream, points, clearance, polish
                     g[k] = min(max(first[b, k], lower[i, k]), upper[i, k])
                 else:
                     g[k] = lower[i, k] + (upper[i, k] - lower[i, k]) * restart_unit(key, (r - lead) * D + k)
-            c = nearest_obstacle(g, prm, centers, radii, nbr, b, wall_floor(g, lower, upper, wall, i), -1.0)[0]
+            # A start whose nearest sphere is nearer than the best so far cannot beat it: the best
+            # clearance floors the boundary's bound, so such a start walks no tree (its clearance,
+            # then the sphere's gap, above the true one, is only compared with top).
+            c = nearest_obstacle(g, prm, centers, radii, nbr, b, max(wall_floor(g, lower, upper, wall, i), top),
+                                 -1.0)[0]
             if c > top:
                 top = c
                 for k in range(D):

@@ -711,8 +711,11 @@ def move_one(b: int, lane: int, ids: wp.array(dtype=wp.int32), first: wp.array(d
                     y[k] = wp.min(wp.max(y[k], lower[i][k]), upper[i][k])
             else:
                 y = restart_point(key, r - lead, lower[i], upper[i])
+            # A start whose nearest sphere is nearer than the best so far cannot beat it: the best
+            # clearance floors the boundary's bound, so such a start walks no tree (its clearance,
+            # then the sphere's gap, above the true one, is only compared with top).
             c, s, bound, f = nearest_obstacle(y, prm, centers, radii, nbr, b,
-                                              wall_floor(y, lower[i], upper[i], wall[i]), F(-1.0))
+                                              wp.max(wall_floor(y, lower[i], upper[i], wall[i]), top), F(-1.0))
             if c > top:
                 top = c
                 x = y
