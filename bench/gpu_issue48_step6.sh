@@ -13,6 +13,9 @@
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step6.sh split    finer cells on a GPU (rounds.SPLIT_RATIO_AHEAD,
 #        profile_kernels' split-R variants) in one process each: the armadillo at 100,000 (3 runs of 4, 3 and 2.5)
 #        and at 1,000,000 (2 runs of 4 and 3), the unit cube at 1,000,000 (2 runs of 4 and 3)
+#   source .gpu2/setup.sh && STEP=step6d bash bench/gpu_issue48_step6.sh turns  the armadillo at 100,000 with
+#        .gpu2/base's ndpack and this checkout's in turn, twice (5 runs each), then numba on the host's cores
+#        (3 runs) and this checkout again (5 runs, pass3): a difference smaller than one lease's drift
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step6.sh profile  the armadillo at 100,000 with every launch
 #        timed (and 3 unprofiled runs, stages timed): what bench/work_model.py --against sets its counts beside
 set -uo pipefail
@@ -62,10 +65,22 @@ PY
     kernels now "split_cube_1m_${CARD}_issue48_${STEP}" --backends warp --count 1000000 --repeats 2 \
       --variants now split-3
     ;;
+  turns)
+    for pass in 1 2; do
+      for version in base now; do
+        kernels $version "armadillo_100k_${CARD}_issue48_${STEP}_pass${pass}" --backends warp \
+          --mesh /tmp/armadillo.obj --count 100000 --repeats 5
+      done
+    done
+    kernels now "armadillo_100k_${CARD}host_numba_issue48_${STEP}" --backends numba --mesh /tmp/armadillo.obj \
+      --count 100000 --repeats 3
+    kernels now "armadillo_100k_${CARD}_issue48_${STEP}_pass3" --backends warp --mesh /tmp/armadillo.obj \
+      --count 100000 --repeats 5
+    ;;
   profile)
     timeout 300 python3 bench/profile_kernels.py --backends warp --mesh /tmp/armadillo.obj --count 100000 \
       --repeats 3 --stages --out "$OUT/profile_kernels_${CARD}_armadillo_issue48_${STEP}.json" 2>&1 \
       | grep -v "^Warp\|^Module\|^ndpack: compiling" | tail -30
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step6.sh measure|numba|split|profile" >&2; exit 2 ;;
+  *) echo "usage: bash bench/gpu_issue48_step6.sh measure|numba|split|turns|profile" >&2; exit 2 ;;
 esac

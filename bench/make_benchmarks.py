@@ -106,9 +106,30 @@ SOURCES = {
           for case in ("cube", "square")],
         ("armadillo_100k_h100_issue48_step6_repeats_now.json", "python3 bench/profile_kernels.py --backends warp "
          "--mesh armadillo.obj --count 100000 --repeats 7 --stages --no-profiled")]},
-    "ahead_tail_2core.json": Source("2 cores", "bf23c2a", "python bench/ahead_tail.py"),
+    # Then Warp's launches replayed and restarts floored (8a198b3) against c93efeb on two more leases: STEP=step6c
+    # (measure, numba, and 7 runs of each), STEP=step6d (turns).
+    **{name: Source("H100, NumPy 2.5", "c93efeb", command, "2026-11-27") for name, command in [
+        *[(f"{case}_h100_issue48_step6c_base.json", "STEP=step6c bash bench/gpu_issue48_step6.sh measure")
+          for case in ("armadillo_100k", "armadillo_1m", "cube_1m")],
+        ("armadillo_100k_h100_issue48_step6c_repeats_base.json", "python3 bench/profile_kernels.py --backends warp "
+         "--mesh armadillo.obj --count 100000 --repeats 7 --stages --no-profiled"),
+        *[(f"armadillo_100k_h100_issue48_step6d_pass{k}_base.json", "STEP=step6d bash bench/gpu_issue48_step6.sh turns")
+          for k in (1, 2)]]},
+    **{name: Source("H100, NumPy 2.5", "8a198b3", command, "2026-11-27") for name, command in [
+        *[(f"{case}_issue48_step6c_now.json", "STEP=step6c bash bench/gpu_issue48_step6.sh measure")
+          for case in ("armadillo_100k_h100", "armadillo_100k_h100host_numba", "armadillo_1m_h100", "cube_1m_h100",
+                       "square_1m_h100")],
+        *[(f"{case}_1m_h100host_numba_issue48_step6c_now.json", "STEP=step6c bash bench/gpu_issue48_step6.sh numba")
+          for case in ("cube", "square")],
+        ("armadillo_100k_h100_issue48_step6c_repeats_now.json", "python3 bench/profile_kernels.py --backends warp "
+         "--mesh armadillo.obj --count 100000 --repeats 7 --stages --no-profiled"),
+        *[(name, "STEP=step6d bash bench/gpu_issue48_step6.sh turns") for name in (
+            "armadillo_100k_h100_issue48_step6d_pass1_now.json", "armadillo_100k_h100_issue48_step6d_pass2_now.json",
+            "armadillo_100k_h100host_numba_issue48_step6d_now.json",
+            "armadillo_100k_h100_issue48_step6d_pass3_now.json")]]},
+    "ahead_tail_2core.json": Source("2 cores", "8a198b3", "python bench/ahead_tail.py"),
     "work_model_2core_armadillo_100k_issue48_step6.json": Source(
-        "2 cores", "c93efeb", "python bench/work_model.py --mesh armadillo.obj --count 100000 --against "
+        "2 cores", "8a198b3", "python bench/work_model.py --mesh armadillo.obj --count 100000 --against "
         "bench/results/profile_kernels_h100_armadillo_issue48_step6.json --constants "
         "bench/results/work_model_2core_armadillo_100k_issue48_step5.json"),
     # Issue 48's fifth step (the host's part of a round): bench/gpu_issue48_step5.sh final on an H100, and
@@ -374,11 +395,18 @@ def scale_h100() -> list[str]:
     step6 = {name: load(f"{name}_issue48_step6b_now.json") for name in (
         "armadillo_100k_h100", "armadillo_100k_h100host_numba", "armadillo_1m_h100", "cube_1m_h100",
         "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")}
-    arm5_cpu, arm5_1m = (step6[name][key] for name, key in [
-        ("armadillo_100k_h100host_numba", "numba"), ("armadillo_1m_h100", "warp")])
-    arm5 = load("armadillo_100k_h100_issue48_step6_repeats_now.json")["warp"]  # 7 runs, after the numba ones
-    cube_1m, cube_1m_cpu = step6["cube_1m_h100"]["warp"], step6["cube_1m_h100host_numba"]["numba"]
-    square_1m, square_1m_cpu = step6["square_1m_h100"]["warp"], step6["square_1m_h100host_numba"]["numba"]
+    final = {name: load(f"{name}_issue48_step6c_now.json") for name in (
+        "armadillo_100k_h100", "armadillo_100k_h100host_numba", "armadillo_1m_h100", "cube_1m_h100",
+        "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")}
+    turns = {name: load(f"armadillo_100k_h100_issue48_step6d_{name}.json")["warp"] for name in (
+        "pass1_base", "pass1_now", "pass2_base", "pass2_now", "pass3_now")}
+    arm5, arm5_cpu = turns["pass3_now"], load("armadillo_100k_h100host_numba_issue48_step6d_now.json")["numba"]
+    arm5_1m = final["armadillo_1m_h100"]["warp"]
+    cube_1m, cube_1m_cpu = final["cube_1m_h100"]["warp"], final["cube_1m_h100host_numba"]["numba"]
+    square_1m, square_1m_cpu = final["square_1m_h100"]["warp"], final["square_1m_h100host_numba"]["numba"]
+    repeats6c = {version: load(f"armadillo_100k_h100_issue48_step6c_repeats_{version}.json")["warp"]
+                 for version in ("base", "now")}
+    base6c = load("armadillo_100k_h100_issue48_step6c_base.json")["warp"]
     repeats6 = load("armadillo_100k_h100_issue48_step6_repeats_now.json")["warp"]
     chain = {(case, version): load(f"{case}_h100_issue48_step6_{version}.json")
              for case in ("armadillo_100k", "armadillo_1m", "cube_1m") for version in ("base", "now")}
@@ -393,7 +421,16 @@ def scale_h100() -> list[str]:
     step6_files += [f"{case}_h100_issue48_step6b_base.json" for case in ("armadillo_100k", "armadillo_1m", "cube_1m")]
     step6_files += ["profile_kernels_h100_armadillo_issue48_step6.json"]
     step6_files += [f"{name}_issue48_step6b_now.json" for name in step6]
-    step6_files += ["armadillo_100k_h100_issue48_step6_repeats_now.json", "ahead_tail_2core.json",
+    step6_files += ["armadillo_100k_h100_issue48_step6_repeats_now.json"]
+    step6_files += [f"{case}_h100_issue48_step6c_base.json" for case in ("armadillo_100k", "armadillo_1m", "cube_1m")]
+    step6_files += ["armadillo_100k_h100_issue48_step6c_repeats_base.json"]
+    step6_files += [f"armadillo_100k_h100_issue48_step6d_pass{k}_base.json" for k in (1, 2)]
+    step6_files += [f"{name}_issue48_step6c_now.json" for name in final]
+    step6_files += ["armadillo_100k_h100_issue48_step6c_repeats_now.json"]
+    step6_files += [f"armadillo_100k_h100_issue48_step6d_pass{k}_now.json" for k in (1, 2)]
+    step6_files += ["armadillo_100k_h100host_numba_issue48_step6d_now.json",
+                    "armadillo_100k_h100_issue48_step6d_pass3_now.json"]
+    step6_files += ["ahead_tail_2core.json",
                     "work_model_2core_armadillo_100k_issue48_step6.json"]
 
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
@@ -428,15 +465,15 @@ def scale_h100() -> list[str]:
                  parts(arm6_profiled), guess6)]
     rows = [
         ["armadillo (100k triangles)", "100,000", seconds(arm5["median"]), "", seconds(arm5_cpu["median"]),
-         f"{arm5['fill']:.4f}", "median of 7 (numba: 3), c93efeb"],
+         f"{arm5['fill']:.4f}", "medians of 5 and 3, 8a198b3"],
         ["unit cube", "100,000", *[seconds(median_of(cube, backend=b)) for b in ("warp", "numba-cuda", "numba")],
          f"{median_of(cube, 'fill', backend='warp'):.4f}", "medians of 2, 4ea141e"],
         ["armadillo (100k triangles)", "1,000,000", seconds(arm5_1m["median"]), "", "",
-         f"{arm5_1m['fill']:.4f}", "median of 2, c93efeb"],
+         f"{arm5_1m['fill']:.4f}", "median of 2, 8a198b3"],
         ["unit cube", "1,000,000", seconds(cube_1m["median"]), "", seconds(cube_1m_cpu["median"]),
-         f"{cube_1m['fill']:.4f}", "median of 2 (numba: 1), c93efeb"],
+         f"{cube_1m['fill']:.4f}", "median of 2 (numba: 1), 8a198b3"],
         ["unit square", "1,000,000", seconds(square_1m["median"]), "", seconds(square_1m_cpu["median"]),
-         f"{square_1m['fill']:.4f}", "median of 2 (numba: 1), c93efeb"],
+         f"{square_1m['fill']:.4f}", "median of 2 (numba: 1), 8a198b3"],
         ["unit cube", "10,000,000", seconds(warp_10m["seconds"]), "", "", f"{warp_10m['fill']:.4f}",
          "one run, e7f6fee"],
     ]
@@ -500,7 +537,17 @@ def scale_h100() -> list[str]:
         f"{seconds(step6['armadillo_100k_h100']['warp now']['median'])} against "
         f"{seconds(chain[('armadillo_100k', 'base6b')]['warp']['median'])} at 100,000, and 7 more runs "
         f"a median of {seconds(repeats6['median'])} "
-        f"({min(repeats6['unprofiled']):.2f}-{max(repeats6['unprofiled']):.2f} s; the table's). "
+        f"({min(repeats6['unprofiled']):.2f}-{max(repeats6['unprofiled']):.2f} s). "
+        "Warp's launches replayed (`wp.Launch`, 16 us a launch against 47 us on 2 cores) and restarts floored by "
+        "the best start so far (8a198b3, the same spheres to the bit) changed nothing that two more leases could "
+        f"see: on one, against c93efeb, {seconds(base6c['median'])} before and "
+        f"{seconds(final['armadillo_100k_h100']['warp now']['median'])} after in the measure's turn, then 7 runs "
+        f"each, one version after the other, {seconds(repeats6c['base']['median'])} and "
+        f"{seconds(repeats6c['now']['median'])}; on the other, in turns, {seconds(turns['pass1_base']['median'])} "
+        f"and {seconds(turns['pass2_base']['median'])} before, {seconds(turns['pass1_now']['median'])} and "
+        f"{seconds(turns['pass2_now']['median'])} after, then {seconds(arm5['median'])} beside numba's "
+        f"{seconds(arm5_cpu['median'])} (the table's). The same code's medians thus span "
+        f"{seconds(arm5['median'])}-{seconds(repeats6c['now']['median'])} across H100 leases. "
         f"A fresh H100's first packing of a mesh: {cold6:.1f} s "
         "([output](../bench/results/compile_h100_issue48_step6b.txt)); "
         "its peak memory at a million (whole device, `STEP=step6 bash bench/gpu_issue48_step5.sh memory`): the "
