@@ -128,6 +128,7 @@ SOURCES = {
             "armadillo_100k_h100host_numba_issue48_step6d_now.json",
             "armadillo_100k_h100_issue48_step6d_pass3_now.json")]]},
     "ahead_tail_2core.json": Source("2 cores", "8a198b3", "python bench/ahead_tail.py"),
+    "launch_cost_2core.json": Source("2 cores", "8a198b3", "python bench/launch_cost.py"),
     "work_model_2core_armadillo_100k_issue48_step6.json": Source(
         "2 cores", "8a198b3", "python bench/work_model.py --mesh armadillo.obj --count 100000 --against "
         "bench/results/profile_kernels_h100_armadillo_issue48_step6.json --constants "
@@ -407,6 +408,7 @@ def scale_h100() -> list[str]:
     repeats6c = {version: load(f"armadillo_100k_h100_issue48_step6c_repeats_{version}.json")["warp"]
                  for version in ("base", "now")}
     base6c = load("armadillo_100k_h100_issue48_step6c_base.json")["warp"]
+    launch_cost = load("launch_cost_2core.json")["rows"][0]
     repeats6 = load("armadillo_100k_h100_issue48_step6_repeats_now.json")["warp"]
     chain = {(case, version): load(f"{case}_h100_issue48_step6_{version}.json")
              for case in ("armadillo_100k", "armadillo_1m", "cube_1m") for version in ("base", "now")}
@@ -430,7 +432,7 @@ def scale_h100() -> list[str]:
     step6_files += [f"armadillo_100k_h100_issue48_step6d_pass{k}_now.json" for k in (1, 2)]
     step6_files += ["armadillo_100k_h100host_numba_issue48_step6d_now.json",
                     "armadillo_100k_h100_issue48_step6d_pass3_now.json"]
-    step6_files += ["ahead_tail_2core.json",
+    step6_files += ["ahead_tail_2core.json", "launch_cost_2core.json",
                     "work_model_2core_armadillo_100k_issue48_step6.json"]
 
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
@@ -538,7 +540,8 @@ def scale_h100() -> list[str]:
         f"{seconds(chain[('armadillo_100k', 'base6b')]['warp']['median'])} at 100,000, and 7 more runs "
         f"a median of {seconds(repeats6['median'])} "
         f"({min(repeats6['unprofiled']):.2f}-{max(repeats6['unprofiled']):.2f} s). "
-        "Warp's launches replayed (`wp.Launch`, 16 us a launch against 47 us on 2 cores) and restarts floored by "
+        f"Warp's launches replayed (`wp.Launch`, {launch_cost['replay_us']:.0f} us a launch against "
+        f"{launch_cost['plain_us']:.0f} us on 2 cores: `python bench/launch_cost.py`) and restarts floored by "
         "the best start so far (8a198b3, the same spheres to the bit) changed nothing that two more leases could "
         f"see: on one, against c93efeb, {seconds(base6c['median'])} before and "
         f"{seconds(final['armadillo_100k_h100']['warp now']['median'])} after in the measure's turn, then 7 runs "

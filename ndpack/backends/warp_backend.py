@@ -328,8 +328,9 @@ class _WarpDevice:
     def _replay(self, kernel, dim, args, block_dim=256):
         """Launch ``kernel`` over ``dim`` threads with ``args`` by replaying its recorded launch
         (``wp.Launch``), setting again only the arguments that are not the last launch's objects:
-        Warp packs every argument of a plain launch, about 47 us for a move's 22 against 16 us for a
-        replay that sets 3 (2 cores), and a GPU round makes about 24 launches."""
+        Warp packs every argument of a plain launch, 57 us for a move's 22 against 13 us for a replay
+        that sets 3 and the size (2 cores, ``bench/launch_cost.py``), and a GPU round makes about 24
+        launches."""
         recorded = self._recorded.get((kernel, block_dim))
         if recorded is None:
             command = self.wp.launch(kernel, dim=dim, inputs=list(args), device=self.where, block_dim=block_dim,
