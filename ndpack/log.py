@@ -47,3 +47,16 @@ def warn(message: str) -> None:
     declined to do but worked around (a cache folder refused), where a Python warning would be
     shown once per place in the code rather than once per process."""
     _shown().warning(message)
+
+
+#: Set by ``ndpack.kernels.compile``, a layer above this one, when it is imported: says the first
+#: compile of ndpack's own Numba functions as it says that of its generated kernels.
+own_compile_hook = None
+
+
+def numba_functions(module: str, what: str, typical: float) -> None:
+    """Say the first compile on this machine of the Numba functions of ndpack's ``module``, which
+    compile next, as ``what``, about ``typical`` seconds until the machine has timed them
+    (through ``ndpack.kernels.compile``, where it is loaded; else nothing is said)."""
+    if own_compile_hook is not None:
+        own_compile_hook(module, what, typical)

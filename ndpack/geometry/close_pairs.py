@@ -137,6 +137,10 @@ def _kernels():
     ``import ndpack`` stays light)."""
     import numba
 
+    from ..log import numba_functions
+
+    # 2.6 s on 2 cores, the first time: said, like every compile a user waits for.
+    numba_functions(__name__, "the conflict check's grid", 2.5)
     global _meets, _first_at
     _meets = numba.njit(cache=True, inline="always")(_meets)  # compiled first: the kernels call them
     _first_at = numba.njit(cache=True)(_first_at)

@@ -138,6 +138,10 @@ def _kernels():
     parallel loop (imported at the first check, so ``import ndpack`` stays light)."""
     import numba
 
+    from ..log import numba_functions
+
+    # 6.9 s on 2 cores, the first time (a parallel loop): said, like every compile a user waits for.
+    numba_functions(__name__, "the overlap check's grid", 6)
     global prange, _slot, _row, _chord
     prange = numba.prange
     _slot = numba.njit(cache=True)(_slot)  # compiled first: the kernels call them

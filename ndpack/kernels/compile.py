@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import log
 from ..log import notice, warn
 from .language import STACK_DEPTH
 
@@ -273,14 +274,17 @@ def _write(path: Path, text: str) -> None:
 
 
 # ---------------------------------------------------------------------------------- notices
-def announce(kind: str, what: str, typical: float | None = None) -> None:
+def announce(kind: str, what: str, typical: float | None = None, where: str | None = None) -> None:
     """Say that ``kind`` ("numba", "numba-cuda" or "warp") is compiling ``what`` (the callers say
     it once per process and kind of kernels): about how long the last compile of these kernels
     took on this machine (:func:`_record`), else ``typical`` (default ``TYPICAL_SECONDS[kind]``),
-    and where the result is kept."""
+    and where the result is kept (``where``, else ndpack's cache folder)."""
     fallback = TYPICAL_SECONDS[kind] if typical is None else typical
     seconds = _measured().get(_estimate_key(kind, what), fallback)
-    kept = f"kept in {cache_root()} for next time" if kept_for_next_time() else "not kept: the cache folder was refused"
+    if where is None and not kept_for_next_time():
+        kept = "not kept: the cache folder was refused"
+    else:
+        kept = f"kept in {where or cache_root()} for next time"
     notice(f"compiling {kind} kernels for {what} (first use on this machine, about {max(seconds, 1):.0f} s; {kept})")
 
 
@@ -333,17 +337,19 @@ class _NumbaListener:
     def module_of(event) -> str | None:
         function = getattr(event.data.get("dispatcher"), "py_func", None)
         module = getattr(function, "__module__", "") or ""
-        return module if module.startswith("ndpack_generated_") else None
+        return module if module.startswith("ndpack_generated_") or module in _own else None
 
     def on_start(self, event):
         module = self.module_of(event)
         if module is None:
             return
-        COMPILES[self.kind] = COMPILES.get(self.kind, 0) + 1
-        title = _titles.get(module, "shapes")
+        own = _own.get(module)
+        if own is None:  # ndpack's own functions are not generated modules: not counted
+            COMPILES[self.kind] = COMPILES.get(self.kind, 0) + 1
+        title = own[0] if own else _titles.get(module, "shapes")
         if title not in self.announced:  # one line per kind of kernels, however many modules
             self.announced.add(title)
-            announce(self.kind, title)
+            announce(self.kind, title, *(own[1:] if own else ()))
         if self.depth == 0:
             self.started = time.perf_counter()
         self.depth += 1
@@ -355,14 +361,33 @@ class _NumbaListener:
         self.depth -= 1
         if self.depth == 0:
             spent = time.perf_counter() - self.started
-            self.total[module] = self.total.get(module, 0.0) + spent
-            title = _titles.get(module, "shapes")
+            own = _own.get(module)
+            if own is None:
+                self.total[module] = self.total.get(module, 0.0) + spent
+            title = own[0] if own else _titles.get(module, "shapes")
             self.title_total[title] = self.title_total.get(title, 0.0) + spent
             _record(self.kind, self.title_total[title], title)
 
 
 _listeners: dict[str, _NumbaListener] = {}
 _titles: dict[str, str] = {}  # module name -> what it holds
+#: ndpack's own Numba functions (``numba.njit(cache=True)`` in its modules, cached beside them):
+#: module name -> (what they are, their first compile's typical seconds, where Numba keeps them).
+#: Announced like the generated modules' kernels, not counted in ``COMPILES``.
+_own: dict[str, tuple[str, float, str]] = {}
+
+
+def own_kernels(module: str, what: str, typical: float) -> None:
+    """Announce the first compile on this machine of the Numba functions of ndpack's ``module``
+    as ``what``, about ``typical`` seconds until the machine has timed it (call before compiling)."""
+    import numba
+
+    where = numba.config.CACHE_DIR or str(Path(sys.modules[module].__file__).parent / "__pycache__")
+    _own[module] = (what, typical, where)
+    _listen()
+
+
+log.own_compile_hook = own_kernels  # the geometry layer's Numba functions call it through ndpack.log
 
 
 def _listen() -> None:

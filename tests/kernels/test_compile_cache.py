@@ -172,7 +172,8 @@ def test_a_second_process_loads_the_kernels_from_disk_and_a_first_says_it_compil
     assert first["valid"] and second["valid"]
     np.testing.assert_array_equal(first["radii"], second["radii"])
     # One line before the compile, naming what and where; none when loading.
-    notices = [line for line in said.splitlines() if line.startswith("ndpack: compiling")]
+    # (ndpack's own grids are said too, where this machine has not compiled them yet: see below.)
+    notices = [line for line in said.splitlines() if line.startswith("ndpack: compiling") and "grid" not in line]
     assert len(notices) == 1 and "numba kernels for 2-D shapes" in notices[0] and str(tmp_path) in notices[0]
     assert "compiling" not in quiet
     # Another size is other numbers for the same code: loaded, not compiled.
@@ -189,6 +190,35 @@ def test_a_second_process_loads_the_kernels_from_disk_and_a_first_says_it_compil
         else:
             os.environ["NDPACK_CACHE"] = previous
     assert any(entry["what"] == "2-D shapes, CPU" and entry["compiled"] for entry in listed), listed
+
+
+OWN_SCRIPT = """
+import numpy as np
+from ndpack.geometry import close_pairs, overlaps
+rng = np.random.default_rng(0)
+centers, radii = rng.random((300, 3)), np.full(300, 0.02)
+print(len(close_pairs.grid(centers, radii, 1e-10, 1.0).pairs()[0]), len(overlaps.overlapping_pairs(centers, radii)[0]))
+"""
+
+
+def test_ndpacks_own_numba_grids_say_their_first_compile(tmp_path):
+    """The conflict check's and the overlap check's Numba grids (ndpack's own functions, cached
+    by Numba beside them or in NUMBA_CACHE_DIR) say their first compile, where it is kept and
+    about how long it takes; a second process loads them and says nothing."""
+    env = {**os.environ, "NDPACK_CACHE": str(tmp_path / "ndpack"), "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
+    runs = [subprocess.run([sys.executable, "-c", OWN_SCRIPT], capture_output=True, text=True, timeout=600, env=env)
+            for _ in range(2)]
+    assert all(run.returncode == 0 for run in runs), runs[0].stderr[-3000:]
+    assert runs[0].stdout == runs[1].stdout and int(runs[0].stdout.split()[0]) > 0  # the grids found pairs
+    said = [line for line in runs[0].stderr.splitlines() if line.startswith("ndpack: compiling")]
+    assert len(said) == 2, runs[0].stderr
+    for line, what in zip(said, ("the conflict check's grid", "the overlap check's grid"), strict=True):
+        assert f"numba kernels for {what} (first use on this machine, about " in line
+        assert f"kept in {tmp_path / 'numba'} for next time" in line
+    assert "compiling" not in runs[1].stderr
+    # The next notice gives this machine's time for them.
+    times = json.loads((tmp_path / "ndpack" / "compile-times.json").read_text())
+    assert times["numba: the conflict check's grid"] > 0 and times["numba: the overlap check's grid"] > 0
 
 
 def test_generated_modules_are_named_by_their_text(tmp_path, monkeypatch):
