@@ -39,3 +39,23 @@ kernels() {
   PYTHONPATH=$path timeout 300 python3 bench/profile_kernels.py --stages --no-profiled \
     --out "$OUT/${name}_${version}.json" "$@" 2>&1 | grep -v "^Warp\|^Module"
 }
+
+# same_spheres FILE CASE...: each case's spheres of .gpu2/base and of this checkout (/tmp/CASE_base.npz and
+# /tmp/CASE_now.npz, written by kernels --spheres) side by side, to FILE and the screen: their counts, the
+# largest change of a radius and of a centre, and their volumes (sums of radius^3).
+same_spheres() {
+  local file=$1
+  shift
+  python3 - "$@" <<'PY' | tee "$file"
+import sys
+import numpy as np
+for case in sys.argv[1:]:
+    base, now = (np.load(f"/tmp/{case}_{v}.npz") for v in ("base", "now"))
+    same = len(base["radii"]) == len(now["radii"])
+    change = float(np.abs(base["radii"] - now["radii"]).max()) if same else None
+    moved = float(np.abs(base["centers"] - now["centers"]).max()) if same else None
+    print(f"{case}, base against now: spheres {len(base['radii'])} and {len(now['radii'])}, largest radius change "
+          f"{change}, largest centre change {moved}; volume {np.sum(base['radii'] ** 3):.6g} and "
+          f"{np.sum(now['radii'] ** 3):.6g}")
+PY
+}

@@ -51,16 +51,7 @@ case "${1:-}" in
         --spheres /tmp/cube_1m_$version.npz
     done
     kernels now "square_1m_${CARD}_issue48_${STEP}" --backends warp --square --count 1000000 --repeats 2
-    python3 - <<'PY' | tee "$OUT/same_spheres_${CARD}_issue48_${STEP}.txt"
-import numpy as np
-for case in ("armadillo_100k", "armadillo_1m", "cube_1m"):
-    base, now = (np.load(f"/tmp/{case}_{v}.npz") for v in ("base", "now"))
-    same = len(base["radii"]) == len(now["radii"])
-    change = float(np.abs(base["radii"] - now["radii"]).max()) if same else None
-    moved = float(np.abs(base["centers"] - now["centers"]).max()) if same else None
-    print(f"{case}, base against now: spheres {len(base['radii'])} and {len(now['radii'])}, "
-          f"largest radius change {change}, largest centre change {moved}")
-PY
+    same_spheres "$OUT/same_spheres_${CARD}_issue48_${STEP}.txt" armadillo_100k armadillo_1m cube_1m
     tar czf "$FINAL/measure_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
   final)

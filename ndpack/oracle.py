@@ -439,9 +439,8 @@ def check_packable(shape: Oracle, samples_per_face: int = 512, seed: int = 0) ->
     distances = shape._distance(points)
     inside = np.flatnonzero(distances < -tolerance)
     if len(inside):
-        face = slice(inside[0] // samples_per_face * samples_per_face, (inside[0] // samples_per_face + 1) *
-                     samples_per_face)  # the first face with a point inside, as face by face
-        worst = face.start + int(np.argmin(distances[face]))
+        start = inside[0] // samples_per_face * samples_per_face  # the first face with a point inside
+        worst = start + int(np.argmin(distances[start : start + samples_per_face]))
         raise BoundsError(
             f"the bounds of {shape!r} do not enclose it: the point "
             f"{np.round(points[worst], 6).tolist()} on the bounding box is inside "

@@ -139,7 +139,7 @@ def _kernels():
 
     from ..log import numba_functions
 
-    # 2.6 s on 2 cores, the first time: said, like every compile a user waits for.
+    # 2.4-2.6 s on 2 cores, the first time: said, like every compile a user waits for.
     numba_functions(__name__, "the conflict check's grid", 2.5)
     global _meets, _first_at
     _meets = numba.njit(cache=True, inline="always")(_meets)  # compiled first: the kernels call them

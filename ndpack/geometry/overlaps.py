@@ -140,7 +140,7 @@ def _kernels():
 
     from ..log import numba_functions
 
-    # 6.9 s on 2 cores, the first time (a parallel loop): said, like every compile a user waits for.
+    # 5.0-6.9 s on 2 cores, the first time (a parallel loop): said, like every compile a user waits for.
     numba_functions(__name__, "the overlap check's grid", 6)
     global prange, _slot, _row, _chord
     prange = numba.prange

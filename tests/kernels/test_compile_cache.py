@@ -216,9 +216,9 @@ def test_ndpacks_own_numba_grids_say_their_first_compile(tmp_path):
         assert f"numba kernels for {what} (first use on this machine, about " in line
         assert f"kept in {tmp_path / 'numba'} for next time" in line
     assert "compiling" not in runs[1].stderr
-    # The next notice gives this machine's time for them.
-    times = json.loads((tmp_path / "ndpack" / "compile-times.json").read_text())
-    assert times["numba: the conflict check's grid"] > 0 and times["numba: the overlap check's grid"] > 0
+    # The next notice gives this machine's time for them: recorded under their names.
+    recorded = json.loads((tmp_path / "ndpack" / "compile-times.json").read_text())
+    assert {"numba: the conflict check's grid", "numba: the overlap check's grid"} <= set(recorded)
 
 
 def test_generated_modules_are_named_by_their_text(tmp_path, monkeypatch):
