@@ -19,7 +19,8 @@ mesh's tree cooperatively in move launches of at most N prototypes (``lanes-off`
 or the set-up's converge; ``converge-off``: not in the set-up's converge; the backend's
 ``cooperative_most`` and ``cooperative_converge_most``, see :mod:`ndpack.backends.warp_lanes`);
 ``share-N``: the lanes agree on the best distance every N rounds (``cooperative_share``);
-``ahead-whole``: the polish ahead runs the whole polish schedule (``rounds.AHEAD_EPS_START``).
+``ahead-whole``: the polish ahead runs the whole polish schedule (``rounds.AHEAD_EPS_START``);
+``reach-F``: the polish ahead reaches down to F of the frontier (``rounds.POLISH_AHEAD``).
 Each variant's spheres are set beside the first variant's: their count and the largest change of
 a radius, sorted.
 Each variant is also timed unprofiled ``--repeats`` times (median). ``--host-profile`` prints
@@ -57,6 +58,8 @@ THREAD_VARIANTS = {f"threads-2^{bits}": 1 << bits for bits in (15, 16, 18, 19, 2
 SPLIT_VARIANTS = {f"split-{ratio:g}": ratio for ratio in (2.0, 2.5, 3.0, 4.0)}
 #: Variants that set where the polish ahead's schedule starts (``rounds.AHEAD_EPS_START``) instead.
 AHEAD_VARIANTS = {"ahead-whole": np.inf}
+#: Variants that set the polish ahead's reach (``rounds.POLISH_AHEAD``, a fraction of the frontier) instead.
+REACH_VARIANTS = {f"reach-{fraction:g}": fraction for fraction in (0.64, 0.512, 0.4)}
 
 #: Driver phases timed inclusively: (owner, attribute name).
 PHASES = [
@@ -206,7 +209,7 @@ def main():
     parser.add_argument("--mesh", default=None, help="a mesh file; default the unit cube (or --square)")
     parser.add_argument("--square", action="store_true", help="the unit square instead of the cube")
     parser.add_argument("--variants", nargs="+", default=["now"],
-                        choices=[*VARIANTS, *THREAD_VARIANTS, *SPLIT_VARIANTS, *AHEAD_VARIANTS])
+                        choices=[*VARIANTS, *THREAD_VARIANTS, *SPLIT_VARIANTS, *AHEAD_VARIANTS, *REACH_VARIANTS])
     parser.add_argument("--repeats", type=int, default=0, help="unprofiled runs per variant (median)")
     parser.add_argument("--host-profile", action="store_true", help="cProfile one unprofiled run of `now`")
     parser.add_argument("--stages", action="store_true",
@@ -226,6 +229,7 @@ def main():
         nd.pack(shape, 3, backend=backend, mode="fast")
         spread_threads, split_ahead = prototypes.SPREAD_THREADS, rounds.SPLIT_RATIO_AHEAD
         ahead_start = getattr(rounds, "AHEAD_EPS_START", None)  # None: a checkout from before it
+        reach = protosphere.POLISH_AHEAD
         defaults = {key: getattr(backend, key) for variant in VARIANTS.values() for key in variant
                     if hasattr(backend, key)}
         first_radii = None
@@ -236,6 +240,7 @@ def main():
             rounds.SPLIT_RATIO_AHEAD = SPLIT_VARIANTS.get(variant, split_ahead)
             if ahead_start is not None:
                 rounds.AHEAD_EPS_START = AHEAD_VARIANTS.get(variant, ahead_start)
+            protosphere.POLISH_AHEAD = REACH_VARIANTS.get(variant, reach)
             timed, stages = [], {}
             for _ in range(args.repeats):
                 undo_stages = install_stages(stages, device_sync(backend)) if args.stages else (lambda: None)
@@ -289,6 +294,7 @@ def main():
         prototypes.SPREAD_THREADS, rounds.SPLIT_RATIO_AHEAD = spread_threads, split_ahead
         if ahead_start is not None:
             rounds.AHEAD_EPS_START = ahead_start
+        protosphere.POLISH_AHEAD = reach
     if args.out:
         with open(args.out, "w") as file:
             json.dump(results, file, indent=1)

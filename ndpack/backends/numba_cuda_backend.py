@@ -75,8 +75,41 @@ def append(i, points, clearance, polished, counter, out_ids, out_values, out_poi
 
 def max_all(count, clearance, below, out):
     i = cuda.grid(1)
-    if i < count and clearance[i] < below:
+    if i < count and clearance[i] < below and clearance[i] > out[0]:  # the read spares most atomics
         cuda.atomic.max(out, 0, clearance[i])
+
+
+# A fast round's window with its late finds, in one query (see the Warp kernels of the same names).
+def late_taken(window, late, floor, few):
+    return window[0] > 0.0 and window[0] >= floor and late[0] < few
+
+
+def window_count(count, clearance, window, relative, low, few, late):
+    i = cuda.grid(1)
+    if i < count:
+        c = clearance[i]
+        top = window[0]
+        if top > 0.0 and c >= max(low, top * (1.0 - relative)) and late[0] < few:
+            cuda.atomic.add(late, 0, 1)
+
+
+def window_below(count, clearance, window, relative, late, floor, few):
+    i = cuda.grid(1)
+    if i < count and late_taken(window, late, floor, few):
+        c = clearance[i]
+        if c < window[0] * (1.0 - relative) and c > window[1]:
+            cuda.atomic.max(window, 1, c)
+
+
+def select_window(count, clearance, polished, points, low, window, relative, late, floor, few, counter, out_ids,
+                  out_values, out_points, out_flags):
+    i = cuda.grid(1)
+    if i < count:
+        frontier = window[0]
+        if late_taken(window, late, floor, few) and window[1] > 0.0:
+            frontier = window[1]
+        if frontier > 0.0 and clearance[i] >= max(low, frontier * (1.0 - relative)):
+            append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
 
 
 def select_all(count, clearance, polished, points, low, high, unpolished, top, relative, counter, out_ids,
@@ -261,7 +294,8 @@ def move_ids(ids, first, first_rows, tries, stream, points, clearance, polished,
                  centers, radii, nbr, steps, h, polish, polish_steps, polish_low, polish_from)
 '''
 ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
-               "select_all", "max_all", "touched_index_select", "gather_ids", "index_bound_ids", "index_fill_ids",
+               "select_all", "max_all", "window_count", "window_below", "select_window", "touched_index_select",
+               "gather_ids", "index_bound_ids", "index_fill_ids",
                "near_finish", "move_ids", "set_floats", "lower_floats", "split_mark",
                "split_cut", "cell_distances", "index_clear", "index_insert_range")
 THREADS_PER_BLOCK = 128

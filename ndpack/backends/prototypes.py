@@ -166,11 +166,18 @@ class Prototypes:
         that holds 5 million prototypes at a million spheres of the armadillo."""
         raise NotImplementedError
 
-    def window(self, fraction: float, most=None):
+    def window(self, fraction: float, most=None, late=None):
         """The largest clearance and the prototypes within ``fraction`` below it, as
         :meth:`candidates` gives them (with ``low = (1 - fraction)`` times it, and ``most``), in
-        one query: ids, clearances, points, polish flags and the largest clearance (a float). None
-        are given when the largest is not positive."""
+        one query: ids, clearances, points, polish flags, the largest clearance (a float) and the
+        frontier the window was taken below (a float). None are given when the largest is not
+        positive.
+
+        ``late = (floor, few)``, the fast mode's late finds (:meth:`~ndpack.drivers.greedy.rounds.Fast.choose`):
+        where the largest clearance is at least ``floor`` and fewer than ``few`` prototypes lie
+        within the window below it, the frontier is the largest clearance below that window
+        (where it is positive), and the window is taken below it.
+        """
         raise NotImplementedError
 
     def leaders(self, k: int, window: float):
@@ -295,15 +302,23 @@ class HostPrototypes(Prototypes):
         return float(np.max(self.clearance, where=self.clearance < below, initial=-np.inf))
 
     def candidates(self, low, most=None):
-        ids = np.flatnonzero(self.clearance >= low)
+        return self._rows(np.flatnonzero(self.clearance >= low), most)
+
+    def _rows(self, ids, most=None):
+        """What :meth:`candidates` gives of prototypes ``ids`` (m,), ascending."""
         ids = ids[largest(self.clearance[ids], most)]
         return ids, self.clearance[ids], self.points[ids], self.polished[ids]
 
-    def window(self, fraction, most=None):
+    def window(self, fraction, most=None, late=None):
         top = self.top()
         if not top > 0:
-            return (*self.candidates(np.inf), top)
-        return (*self.candidates((1 - fraction) * top, most), top)
+            return (*self.candidates(np.inf), top, top)
+        frontier, ids = top, np.flatnonzero(self.clearance >= (1 - fraction) * top)
+        if late is not None and top >= late[0] and len(ids) < late[1]:
+            below = self.top(below=(1 - fraction) * top)
+            if below > 0:
+                frontier, ids = below, np.flatnonzero(self.clearance >= (1 - fraction) * below)
+        return (*self._rows(ids, most), top, frontier)
 
     def leaders(self, k, window):
         k = min(k, len(self))
@@ -482,13 +497,15 @@ class DevicePrototypes(Prototypes):
         self.answers = (device.empty(count, "index"), device.empty(count, "float"),
                         device.empty(count, "point"), device.empty(count, "index"))
         self.d_counter, self.d_top = device.empty(1, "index"), device.empty(1, "float")
+        # A window's largest clearance and the largest below it, and how many lie within it (window)
+        self.d_window, self.d_late = device.empty(2, "float"), device.empty(1, "index")
         self.d_scratch = device.empty((1, 1), "index")  # the unused table of a bound-only index query
         self.d_no_first = device.empty(1, "point")  # the first points of a move that has none
         self.d_nearest = None  # (n, 1): the touched query's nearest new sphere per prototype
         self.sphere_index = DeviceIndex(self.dim, device)  # the spheres'
         self.touched_index = DeviceIndex(self.dim, device)  # a round's new spheres
         self.width = self.FIRST_WIDTH
-        self.prefix = {}  # kernel name -> answer rows its next query copies with the counter
+        self.answered = {}  # kernel name -> its last two answers' rows (see _compact)
         self._window = FIRST_WINDOW
         self._steps = {}
 
@@ -551,14 +568,18 @@ class DevicePrototypes(Prototypes):
         self.answers = tuple(self.device.empty(capacity, kind) for kind in ("index", "float", "point", "index"))
         self.capacity = capacity
 
-    def _compact(self, kernel, *args, fields=(0, 1, 2, 3), top=False, most=None):
+    def _compact(self, kernel, *args, fields=(0, 1, 2, 3), scalars=(), most=None):
         """Run a kernel that appends matches, with one synchronisation: ids (m,) ascending, their
         clearances, points (m, d) and polish flags (those not among ``fields``, ascending
-        positions in that order starting with the ids, come back None, uncopied), and with
-        ``top`` the device's last maximum (``d_top``), else NaN.
+        positions in that order starting with the ids, come back None, uncopied), and a list of
+        host copies of the small device arrays ``scalars``, copied in the same synchronisation.
 
-        The first copy takes a prefix of each answer, sized from this kernel's last answer (a
-        round's queries differ by orders of magnitude); a longer answer is copied again whole.
+        The first copy takes a prefix of each answer, twice the longer of this kernel's last two
+        answers (a round's queries differ by orders of magnitude, and one kernel serves several:
+        a selection the window and the polish ahead, the split marks each level); a longer answer
+        is copied again whole, a second synchronisation. Against twice the last answer alone, the
+        armadillo at 20,000 spheres copied again 20 answers of 170 instead of 40, for 35% more
+        rows copied.
         With ``most`` (``fields`` holding the values, 1), only the rows of the ``most`` largest
         values come back (:func:`largest`): of a longer answer only the ids and values are copied,
         and the points and polish flags of the rows kept are gathered from the store (as a
@@ -569,16 +590,17 @@ class DevicePrototypes(Prototypes):
         device = self.device
         device.fill(self.d_counter, 0)
         device.launch(kernel, len(self), *args, self.d_counter, *self.answers)
-        prefix = self.prefix.get(kernel, min(len(self), self.FIRST_PREFIX))
+        recent = self.answered.get(kernel, ())
+        prefix = min(len(self), max(self.FIRST_PREFIX, 2 * max(recent, default=0)))
         wanted = [self.answers[field] for field in fields]
         counter, *answers = device.fetch(
-            (self.d_counter, 1), *([(self.d_top, 1)] if top else []), *[(answer, prefix) for answer in wanted]
-        )
-        maximum = float(answers.pop(0)[0]) if top else np.nan
+            (self.d_counter, 1), *[(array, array.shape[0]) for array in scalars],
+            *[(answer, prefix) for answer in wanted])
+        extras = [answers.pop(0) for _ in scalars]
         count = int(counter[0])
-        self.prefix[kernel] = min(len(self), max(self.FIRST_PREFIX, 2 * (count if most is None else min(count, most))))
+        self.answered[kernel] = (*recent[-1:], count if most is None else min(count, most))
         if most is not None and count > max(prefix, most):
-            return (*self._largest_rows(count, most, fields), maximum)
+            return (*self._largest_rows(count, most, fields), extras)
         if count > prefix:
             answers = device.fetch(*[(answer, count) for answer in wanted])
         answers = [answer[:count] for answer in answers]
@@ -589,7 +611,7 @@ class DevicePrototypes(Prototypes):
         out = [None] * 4
         for field, answer in zip(fields, answers):
             out[field] = answer[order]
-        return (*out, maximum)
+        return (*out, extras)
 
     def _largest_rows(self, count, most, fields):
         """The ``count`` answers' rows of the ``most`` largest values, as :meth:`_compact` returns
@@ -618,9 +640,10 @@ class DevicePrototypes(Prototypes):
             self.device.fill(self.d_top, -np.inf)
             self.device.launch("max_all", len(self), self.count, self.d_clearance, np.inf, self.d_top)
         fields = (0, 1, 2, 3) if points else (0, 1)
-        return self._compact("select_all", self.count, self.d_clearance, self.d_polished, self.d_points, float(low),
-                             float(high), int(unpolished), self.d_top, float(relative), fields=fields,
-                             top=relative >= 0, most=most)
+        *rows, extras = self._compact("select_all", self.count, self.d_clearance, self.d_polished, self.d_points,
+                                      float(low), float(high), int(unpolished), self.d_top, float(relative),
+                                      fields=fields, scalars=(self.d_top,) if relative >= 0 else (), most=most)
+        return (*rows, float(extras[0][0]) if extras else np.nan)
 
     def select(self, low=-np.inf, high=np.inf, unpolished=False):
         ids, clearance, _, _, _ = self._select(low, high, unpolished, points=False)
@@ -630,12 +653,30 @@ class DevicePrototypes(Prototypes):
         ids, clearance, points, polished, _ = self._select(low, most=most)
         return ids, clearance, points, polished != 0
 
-    def window(self, fraction, most=None):
-        # The kernel raises ``low`` to the window's floor only where the largest is positive;
-        # ``low`` keeps the others (everything, at a run's end) on the device.
-        ids, clearance, points, polished, top = self._select(low=np.finfo(np.float32).tiny, relative=fraction,
-                                                             most=most)
-        return ids, clearance, points, polished != 0, top
+    def window(self, fraction, most=None, late=None):
+        # The kernels take the window below a positive frontier only, at least ``low``: nothing is
+        # selected at a run's end, when no clearance is positive.
+        low = np.finfo(np.float32).tiny
+        if late is None:
+            ids, clearance, points, polished, top = self._select(low=low, relative=fraction, most=most)
+            return ids, clearance, points, polished != 0, top, top
+        # The late finds' rule on the device: four launches, one synchronisation (a rule applied on
+        # the host took three when it held, in most rounds of a large packing).
+        device, count = self.device, self.count
+        floor, few = float(late[0]), int(late[1])
+        device.fill(self.d_window, -np.inf)
+        device.fill(self.d_late, 0)
+        device.launch("max_all", len(self), count, self.d_clearance, np.inf, self.d_window)
+        device.launch("window_count", len(self), count, self.d_clearance, self.d_window, float(fraction), low, few,
+                      self.d_late)
+        device.launch("window_below", len(self), count, self.d_clearance, self.d_window, float(fraction), self.d_late,
+                      floor, few)
+        ids, clearance, points, polished, (window, counted) = self._compact(
+            "select_window", count, self.d_clearance, self.d_polished, self.d_points, low, self.d_window,
+            float(fraction), self.d_late, floor, few, scalars=(self.d_window, self.d_late), most=most)
+        top, below = float(window[0]), float(window[1])
+        taken = top > 0 and top >= floor and int(counted[0]) < few and below > 0  # the kernels' rule
+        return ids, clearance, points, polished != 0, top, below if taken else top
 
     def top(self, below=np.inf):
         self.device.fill(self.d_top, -np.inf)

@@ -261,7 +261,7 @@ class _WarpDevice:
         self.module, self.params, self.h = backend._module(shape)
         self.shape = shape
         self.dtypes = {"float": self.module.F, "point": self.module.VecD, "index": self.wp.int32}
-        self._staging = {}  # (slot, dtype) -> pinned host array that fetch copies into
+        self._staging = {}  # (slot, dtype) -> pinned host array that fetch copies into, and its numpy view
         self._recorded = {}  # (kernel, block size) -> its recorded launch (wp.Launch) and last arguments
 
     def upload(self, host, kind):
@@ -290,14 +290,17 @@ class _WarpDevice:
         staged = []
         for slot, (array, count) in enumerate(pairs):
             key = (slot, array.dtype)
-            if key not in self._staging or self._staging[key].shape[0] < count:
-                rows = staging_rows(self._staging[key].shape[0] if key in self._staging else 0, count)
-                self._staging[key] = wp.empty(rows, dtype=array.dtype, device="cpu", pinned=True)
+            if key not in self._staging or self._staging[key][0].shape[0] < count:
+                rows = staging_rows(self._staging[key][0].shape[0] if key in self._staging else 0, count)
+                buffer = wp.empty(rows, dtype=array.dtype, device="cpu", pinned=True)
+                # Its numpy view once: making one costs a fetch more than its copy does.
+                self._staging[key] = (buffer, buffer.numpy())
+            buffer, view = self._staging[key]
             if count:  # pinned destination: the copies queue behind the kernels, one wait for all
-                wp.copy(self._staging[key], array, count=count)
-            staged.append((self._staging[key], count, array))
+                wp.copy(buffer, array, count=count)
+            staged.append((view, count, array))
         wp.synchronize_device(self.where)
-        return [self._host(buffer.numpy()[:count], array) for buffer, count, array in staged]
+        return [self._host(view[:count], array) for view, count, array in staged]
 
     def _host(self, values, array):
         """A float64 (or int64) copy of fetched ``values`` of the device ``array``."""

@@ -229,8 +229,65 @@ def append(i: int, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F), p
 @wp.kernel
 def max_all(count: int, clearance: wp.array(dtype=F), below: F, out: wp.array(dtype=F)):
     c = clearance[wp.tid()]
-    if c < below:
+    if c < below and c > out[0]:  # the read spares most atomics on one address
         wp.atomic_max(out, 0, c)
+
+
+# A fast round's window with its late finds (DevicePrototypes.window with ``late``), in one query:
+# max_all gives the largest clearance (``window[0]``), window_count how many lie within the window
+# below it, window_below the largest clearance below that window (``window[1]``) where the late
+# finds' rule may take it, and select_window the window below the frontier that the rule gives.
+@wp.func
+def window_edge(top: F, relative: F):
+    return top * (F(1.0) - relative)
+
+
+@wp.func
+def late_taken(window: wp.array(dtype=F), late: wp.array(dtype=wp.int32), floor: F, few: int):
+    """Whether the late finds' rule takes the frontier below the largest clearance's window."""
+    return window[0] > F(0.0) and window[0] >= floor and late[0] < few
+
+
+@wp.kernel
+def window_count(count: int, clearance: wp.array(dtype=F), window: wp.array(dtype=F), relative: F, low: F, few: int,
+                 late: wp.array(dtype=wp.int32)):
+    """``late[0]``: how many clearances lie within ``relative`` below ``window[0]`` (and at least
+    ``low``), counted up to ``few`` at least (past it the count only has to stay there)."""
+    c = clearance[wp.tid()]
+    top = window[0]
+    if top > F(0.0) and c >= wp.max(low, window_edge(top, relative)) and late[0] < few:
+        wp.atomic_add(late, 0, 1)
+
+
+@wp.kernel
+def window_below(count: int, clearance: wp.array(dtype=F), window: wp.array(dtype=F), relative: F,
+                 late: wp.array(dtype=wp.int32), floor: F, few: int):
+    """``window[1]``: the largest clearance below the window of ``window[0]``, where the late finds'
+    rule applies (else it stays as filled)."""
+    if late_taken(window, late, floor, few):
+        c = clearance[wp.tid()]
+        if c < window_edge(window[0], relative) and c > window[1]:  # the read spares most atomics
+            wp.atomic_max(window, 1, c)
+
+
+@wp.kernel
+def select_window(count: int, clearance: wp.array(dtype=F), polished: wp.array(dtype=wp.int32),
+                  points: wp.array(dtype=VecD), low: F, window: wp.array(dtype=F), relative: F,
+                  late: wp.array(dtype=wp.int32), floor: F, few: int,
+                  counter: wp.array(dtype=wp.int32), out_ids: wp.array(dtype=wp.int32),
+                  out_values: wp.array(dtype=F), out_points: wp.array(dtype=VecD),
+                  out_flags: wp.array(dtype=wp.int32)):
+    """Append the prototypes within ``relative`` below the frontier (and at least ``low``): the
+    largest clearance ``window[0]``, or ``window[1]`` where the late finds' rule takes it and it
+    is positive; none where the largest is not positive."""
+    frontier = window[0]
+    if late_taken(window, late, floor, few) and window[1] > F(0.0):
+        frontier = window[1]
+    if frontier > F(0.0):
+        i = wp.tid()
+        c = clearance[i]
+        if c >= wp.max(low, window_edge(frontier, relative)):
+            append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
 
 
 @wp.kernel

@@ -62,12 +62,16 @@ POLISH_PASSES = 2
 #: Fast mode on a launch-bound backend (a GPU, :attr:`~ndpack.backends.base.Backend.launch_bound`):
 #: after a round, every unpolished prototype above this fraction of its frontier is polished, in
 #: the launch that moves the touched and new prototypes (a
-#: :class:`~ndpack.backends.prototypes.PolishAhead`), so that the next round's window (which
-#: starts near ``(1 - FAST_WINDOW)**2`` of it) is mostly polished already and its choice needs no
-#: polish launch of its own. It polishes about 2.4x as many prototypes (armadillo, 30,000 spheres;
-#: docs/benchmarks.md, fifth steps): lanes a latency-bound launch leaves idle on a GPU, but work
-#: on a CPU, where it stays off.
-POLISH_AHEAD = (1 - FAST_WINDOW) ** 2
+#: :class:`~ndpack.backends.prototypes.PolishAhead`), so that the next rounds' windows are mostly
+#: polished already and their choices need no polish launch of their own: lanes a latency-bound
+#: launch leaves idle on a GPU, but work on a CPU, where it stays off. The next round's window
+#: starts near ``(1 - FAST_WINDOW)**2`` of the frontier, but one whose candidates are few (late
+#: finds) reaches further down (see ``SMALL_ROUND``): with ``(1 - FAST_WINDOW)**2`` the armadillo
+#: at 100,000 spheres still made 8.7 polish launches a run (3 seeds), each as long as a move
+#: launch's chain; with ``(1 - FAST_WINDOW)**3`` 2 (the cube and the square at 10,000: 3.7 and 10.3
+#: against 2 and 3), and the same fill within 0.02% (numba with a GPU's policies, 2 cores;
+#: docs/benchmarks.md, issue 48's seventh step).
+POLISH_AHEAD = (1 - FAST_WINDOW) ** 3
 #: The polish ahead starts where the polish schedule has cooled to this ``eps``: 21 of its 60
 #: steps in the fast mode, a little above where a move's schedule stops (``FAST_EPS_END``), down to
 #: the polish's end. It follows a converged move, or polishes prototypes that converged in an
@@ -259,6 +263,7 @@ class Fast:
         self.ratio, self.polish_ahead = ratio, polish_ahead
         self.ties = True  # ties taken as the faithful mode takes them (:func:`_ties_first`)
         self.frontier = np.inf  # the last round's largest clearance, late finds aside
+        self.ahead_steps = None  # the polish ahead's schedule (:func:`ahead_schedule`), once needed
 
     def choose(self, state, min_radius, room, max_radius=np.inf):
         """Every candidate within the window below the frontier or above it, largest first, kept
@@ -283,19 +288,15 @@ class Fast:
         ceiling = max_radius + state.margin  # a clearance above it gives a sphere of max_radius
         passes = 0
         while True:
-            # One query, one sync on a GPU; no more candidates than a round takes.
-            ids, clearance, points, polished, top = store.window(window, most=MAX_CANDIDATES)
+            # One query, one sync on a GPU, the late finds' rule included; no more candidates than
+            # a round takes.
+            ids, clearance, points, polished, top, frontier = store.window(
+                window, most=MAX_CANDIDATES, late=((1 - window) * self.frontier, few))
             if top <= 0:
                 return np.empty((0, state.dim)), np.empty(0)
-            frontier = top
             if top > ceiling:
                 frontier = ceiling
                 ids, clearance, points, polished = store.candidates((1 - window) * ceiling, MAX_CANDIDATES)
-            elif top >= (1 - window) * self.frontier and len(ids) < few:
-                below = store.top(below=(1 - window) * top)
-                if below > 0:
-                    frontier = below
-                    ids, clearance, points, polished = store.candidates((1 - window) * frontier, MAX_CANDIDATES)
             order = top_order(ids, clearance, min(MAX_CANDIDATES, len(ids)))
             ids, clearance, points, polished = ids[order], clearance[order], points[order], polished[order]
             full = capped(state, clearance, max_radius)
@@ -373,7 +374,9 @@ class Fast:
         if polish_ahead is not None:  # the new ones are not converged (-inf): none of them is selected
             low = polish_ahead * top
             waiting, _ = store.select(low=low, unpolished=True)
-            ahead = PolishAhead(ahead_schedule(state.polish_steps), low,
+            if self.ahead_steps is None:  # one array for the run: a device store copies each new one up
+                self.ahead_steps = ahead_schedule(state.polish_steps)
+            ahead = PolishAhead(self.ahead_steps, low,
                                 np.setdiff1d(waiting, moving, assume_unique=True))
         state.reconverge(moving, None if touched is None else touched.pushed, ahead=ahead)
         return total

@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Issue 48, seventh step (a round's host work: the late finds' rule in the window's query, on the device;
+# answers' first copies sized from their kernel's last two; pinned buffers' numpy views kept; the polish
+# ahead reaching down to (1 - FAST_WINDOW)**3 of the frontier, rounds.POLISH_AHEAD), on the GPU machine
+# after the set-up runs (../shared/device/README.md):
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step7.sh measure  this checkout against the one in
+#        .gpu2/base (BASE, the commit before the step: git archive BASE ndpack | tar x -C .gpu2/base), in one
+#        run: the armadillo at 100,000 with each in turn, twice (5 runs each), numba on the host's cores
+#        (3 runs), this checkout with the polish ahead's old reach beside its own in one process (3 runs
+#        each); the armadillo and the unit cube at 1,000,000 (2 runs each, both checkouts), the unit square
+#        at 1,000,000 (2 runs); then one profiled run at 100,000 (every launch timed, and the host's
+#        cProfile); the files in one archive, $OUT/measure_CARD_issue48_step7.tgz
+set -uo pipefail
+source bench/gpu_header.sh
+[ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
+STEP=${STEP:-step7}  # another name for a second run of the same step
+export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
+case "${1:-}" in
+  measure)
+    [ -d .gpu2/base/ndpack ] || { echo "measure: .gpu2/base/ndpack is missing" >&2; exit 2; }
+    FINAL=$OUT
+    OUT=/tmp/measure && mkdir -p $OUT && cp "$FINAL/gpu.txt" $OUT/
+    for pass in 1 2; do
+      for version in base now; do
+        kernels $version "armadillo_100k_${CARD}_issue48_${STEP}_pass${pass}" --backends warp \
+          --mesh /tmp/armadillo.obj --count 100000 --repeats 5
+      done
+    done
+    kernels now "armadillo_100k_${CARD}host_numba_issue48_${STEP}" --backends numba --mesh /tmp/armadillo.obj \
+      --count 100000 --repeats 3
+    kernels now "armadillo_100k_${CARD}_issue48_${STEP}_reach" --backends warp --mesh /tmp/armadillo.obj \
+      --count 100000 --repeats 3 --variants now reach-0.64
+    for version in base now; do
+      kernels $version "armadillo_1m_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj \
+        --count 1000000 --repeats 2
+      kernels $version "cube_1m_${CARD}_issue48_${STEP}" --backends warp --count 1000000 --repeats 2
+    done
+    kernels now "square_1m_${CARD}_issue48_${STEP}" --backends warp --square --count 1000000 --repeats 2
+    timeout 300 python3 bench/profile_kernels.py --backends warp --mesh /tmp/armadillo.obj --count 100000 \
+      --repeats 1 --stages --host-profile --out "$OUT/profile_kernels_${CARD}_armadillo_issue48_${STEP}.json" 2>&1 \
+      | grep -v "^Warp\|^Module\|^ndpack: compiling" > "$OUT/profile_kernels_${CARD}_armadillo_issue48_${STEP}.txt"
+    tail -5 "$OUT/profile_kernels_${CARD}_armadillo_issue48_${STEP}.txt"
+    tar czf "$FINAL/measure_${CARD}_issue48_${STEP}.tgz" -C $OUT .
+    ;;
+  *) echo "usage: bash bench/gpu_issue48_step7.sh measure" >&2; exit 2 ;;
+esac
