@@ -10,6 +10,11 @@
 #        each); the armadillo and the unit cube at 1,000,000 (2 runs each, both checkouts), the unit square
 #        at 1,000,000 (2 runs); then one profiled run at 100,000 (every launch timed, and the host's
 #        cProfile); the files in one archive, $OUT/measure_CARD_issue48_step7.tgz
+#   source .gpu2/setup.sh && STEP=step7b bash bench/gpu_issue48_step7.sh final  this checkout's figures, on
+#        another lease: a fresh machine's first packing of a mesh; the armadillo at 100,000 with .gpu2/base's
+#        ndpack and this checkout's in turn (5 runs each), numba on the host's cores (3 runs); the armadillo,
+#        the unit cube and the unit square at 1,000,000 (2 runs each), numba on the cube and the square at
+#        1,000,000 (one run each); peak GPU memory at a million (bench/gpu_issue48_step5.sh memory)
 set -uo pipefail
 source bench/gpu_header.sh
 [ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
@@ -42,5 +47,22 @@ case "${1:-}" in
     tail -5 "$OUT/profile_kernels_${CARD}_armadillo_issue48_${STEP}.txt"
     tar czf "$FINAL/measure_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step7.sh measure" >&2; exit 2 ;;
+  final)
+    [ -d .gpu2/base/ndpack ] || { echo "final: .gpu2/base/ndpack is missing" >&2; exit 2; }
+    cold_first_packing "$OUT/compile_${CARD}_issue48_${STEP}.txt"
+    for version in base now; do
+      kernels $version "armadillo_100k_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj \
+        --count 100000 --repeats 5
+    done
+    kernels now "armadillo_100k_${CARD}host_numba_issue48_${STEP}" --backends numba --mesh /tmp/armadillo.obj \
+      --count 100000 --repeats 3
+    kernels now "armadillo_1m_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj \
+      --count 1000000 --repeats 2
+    kernels now "cube_1m_${CARD}_issue48_${STEP}" --backends warp --count 1000000 --repeats 2
+    kernels now "square_1m_${CARD}_issue48_${STEP}" --backends warp --square --count 1000000 --repeats 2
+    kernels now "cube_1m_${CARD}host_numba_issue48_${STEP}" --backends numba --count 1000000 --repeats 1
+    kernels now "square_1m_${CARD}host_numba_issue48_${STEP}" --backends numba --square --count 1000000 --repeats 1
+    bash bench/gpu_issue48_step5.sh memory
+    ;;
+  *) echo "usage: bash bench/gpu_issue48_step7.sh measure|final" >&2; exit 2 ;;
 esac
