@@ -127,6 +127,28 @@ SOURCES = {
             "armadillo_100k_h100_issue48_step6d_pass1_now.json", "armadillo_100k_h100_issue48_step6d_pass2_now.json",
             "armadillo_100k_h100host_numba_issue48_step6d_now.json",
             "armadillo_100k_h100_issue48_step6d_pass3_now.json")]]},
+    # Issue 48's seventh step (a round's host work): bench/gpu_issue48_step7.sh on two H100 leases, this code
+    # (1e767cb) against 9d800f2: measure on the first, STEP=step7b final on the second.
+    **{name: Source("H100, NumPy 2.5", "9d800f2", command, "2026-11-27") for name, command in [
+        *[(f"{case}_h100_issue48_step7_{kind}base.json", "bash bench/gpu_issue48_step7.sh measure")
+          for case, kind in (("armadillo_100k", "pass1_"), ("armadillo_100k", "pass2_"), ("armadillo_1m", ""),
+                             ("cube_1m", ""))],
+        ("armadillo_100k_h100_issue48_step7b_base.json", "STEP=step7b bash bench/gpu_issue48_step7.sh final")]},
+    **{name: Source("H100, NumPy 2.5", "1e767cb", command, "2026-11-27") for name, command in [
+        *[(f"{case}_issue48_step7_{kind}now.json", "bash bench/gpu_issue48_step7.sh measure")
+          for case, kind in (("armadillo_100k_h100", "pass1_"), ("armadillo_100k_h100", "pass2_"),
+                             ("armadillo_100k_h100", "reach_"), ("armadillo_100k_h100host_numba", ""),
+                             ("armadillo_1m_h100", ""), ("cube_1m_h100", ""), ("square_1m_h100", ""))],
+        ("profile_kernels_h100_armadillo_issue48_step7.json", "bash bench/gpu_issue48_step7.sh measure"),
+        *[(f"{case}_issue48_step7b_now.json", "STEP=step7b bash bench/gpu_issue48_step7.sh final")
+          for case in ("armadillo_100k_h100", "armadillo_100k_h100host_numba", "armadillo_1m_h100", "cube_1m_h100",
+                       "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")]]},
+    "ahead_fraction_2core.json": Source(
+        "2 cores", "1e767cb", "python bench/ahead_tail.py --starts 3e-4 --fractions 0.64 0.512 0.4 --large-seeds 3"),
+    "work_model_2core_armadillo_100k_issue48_step7.json": Source(
+        "2 cores", "1e767cb", "python bench/work_model.py --mesh armadillo.obj --count 100000 --against "
+        "bench/results/profile_kernels_h100_armadillo_issue48_step7.json --constants "
+        "bench/results/work_model_2core_armadillo_100k_issue48_step5.json"),
     "ahead_tail_2core.json": Source("2 cores", "8a198b3", "python bench/ahead_tail.py"),
     "launch_cost_2core.json": Source("2 cores", "8a198b3", "python bench/launch_cost.py"),
     "work_model_2core_armadillo_100k_issue48_step6.json": Source(
@@ -171,7 +193,7 @@ SOURCES = {
         "2 cores", "3ffe337", "python bench/work_model.py --mesh armadillo.obj --count 100000 "
         "--against bench/results/profile_kernels_h100_armadillo_issue48_step2.json "
         "--constants bench/results/work_model_2core_armadillo_100k_issue48_before.json"),
-    "policy_fill_2core_10k.json": Source("2 cores", "3ffe337", "python bench/policy_fill.py --count 10000 --seeds 3"),
+    "policy_fill_2core_10k.json": Source("2 cores", "1e767cb", "python bench/policy_fill.py --count 10000 --seeds 3"),
     "compile_options_h100_issue48.json": Source(
         "H100, NumPy 2.5", "3ffe337", "python3 bench/compile_options.py --mesh armadillo.obj --variants O2 default "
         "--count 100000 --repeats 3"),
@@ -383,7 +405,6 @@ def intro() -> list[str]:
 
 
 def scale_h100() -> list[str]:
-    arm = load("profile_kernels_h100_armadillo_issue48_step2.json")["warp now"]
     cube = load("round_time_h100_cube_issue20_step7.json")["results"]
     lanes = load("profile_kernels_h200_armadillo_issue48_step4.json")
     arm3, arm3_off, converge_off = lanes["warp now"], lanes["warp lanes-off"], lanes["warp converge-off"]
@@ -393,52 +414,44 @@ def scale_h100() -> list[str]:
     model4 = load("work_model_2core_armadillo_100k_issue48_step4.json")
     cold = {card: float(re.search(r"cache empty: ([0-9.]+) s", (RESULTS / f"compile_{card}_issue48_step4.txt")
                                   .read_text())[1]) for card in ("h100", "h200")}
-    step6 = {name: load(f"{name}_issue48_step6b_now.json") for name in (
+    # Issue 48's seventh step: its first lease (measure: turns, the reach in one process, the millions against
+    # 9d800f2) and a second (final: the table's figures).
+    final = {name: load(f"{name}_issue48_step7b_now.json") for name in (
         "armadillo_100k_h100", "armadillo_100k_h100host_numba", "armadillo_1m_h100", "cube_1m_h100",
         "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")}
-    final = {name: load(f"{name}_issue48_step6c_now.json") for name in (
-        "armadillo_100k_h100", "armadillo_100k_h100host_numba", "armadillo_1m_h100", "cube_1m_h100",
-        "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")}
-    turns = {name: load(f"armadillo_100k_h100_issue48_step6d_{name}.json")["warp"] for name in (
-        "pass1_base", "pass1_now", "pass2_base", "pass2_now", "pass3_now")}
-    arm5, arm5_cpu = turns["pass3_now"], load("armadillo_100k_h100host_numba_issue48_step6d_now.json")["numba"]
+    arm5, arm5_cpu = final["armadillo_100k_h100"]["warp"], final["armadillo_100k_h100host_numba"]["numba"]
     arm5_1m = final["armadillo_1m_h100"]["warp"]
     cube_1m, cube_1m_cpu = final["cube_1m_h100"]["warp"], final["cube_1m_h100host_numba"]["numba"]
     square_1m, square_1m_cpu = final["square_1m_h100"]["warp"], final["square_1m_h100host_numba"]["numba"]
-    repeats6c = {version: load(f"armadillo_100k_h100_issue48_step6c_repeats_{version}.json")["warp"]
-                 for version in ("base", "now")}
-    base6c = load("armadillo_100k_h100_issue48_step6c_base.json")["warp"]
-    launch_cost = load("launch_cost_2core.json")["rows"][0]
-    repeats6 = load("armadillo_100k_h100_issue48_step6_repeats_now.json")["warp"]
-    chain = {(case, version): load(f"{case}_h100_issue48_step6_{version}.json")
-             for case in ("armadillo_100k", "armadillo_1m", "cube_1m") for version in ("base", "now")}
-    chain[("armadillo_100k", "base6b")] = load("armadillo_100k_h100_issue48_step6b_base.json")
-    tail = load("ahead_tail_2core.json")["rows"]
-    tail_fill = {(row["shape"], row["start"]): row["fill"] for row in tail}
-    peak6 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
-                            (RESULTS / "memory_h100_issue48_step6.txt").read_text()))
-    cold6 = float(re.search(r"cache empty: ([0-9.]+) s", (RESULTS / "compile_h100_issue48_step6b.txt").read_text())[1])
-    step6_files = [f"{case}_h100_issue48_step6_base.json" for case in ("armadillo_100k", "armadillo_1m", "cube_1m")]
-    step6_files += [f"{case}_h100_issue48_step6_now.json" for case in ("armadillo_100k", "armadillo_1m", "cube_1m")]
-    step6_files += [f"{case}_h100_issue48_step6b_base.json" for case in ("armadillo_100k", "armadillo_1m", "cube_1m")]
-    step6_files += ["profile_kernels_h100_armadillo_issue48_step6.json"]
-    step6_files += [f"{name}_issue48_step6b_now.json" for name in step6]
-    step6_files += ["armadillo_100k_h100_issue48_step6_repeats_now.json"]
-    step6_files += [f"{case}_h100_issue48_step6c_base.json" for case in ("armadillo_100k", "armadillo_1m", "cube_1m")]
-    step6_files += ["armadillo_100k_h100_issue48_step6c_repeats_base.json"]
-    step6_files += [f"armadillo_100k_h100_issue48_step6d_pass{k}_base.json" for k in (1, 2)]
-    step6_files += [f"{name}_issue48_step6c_now.json" for name in final]
-    step6_files += ["armadillo_100k_h100_issue48_step6c_repeats_now.json"]
-    step6_files += [f"armadillo_100k_h100_issue48_step6d_pass{k}_now.json" for k in (1, 2)]
-    step6_files += ["armadillo_100k_h100host_numba_issue48_step6d_now.json",
-                    "armadillo_100k_h100_issue48_step6d_pass3_now.json"]
-    step6_files += ["ahead_tail_2core.json", "launch_cost_2core.json",
-                    "work_model_2core_armadillo_100k_issue48_step6.json"]
+    base7b = load("armadillo_100k_h100_issue48_step7b_base.json")["warp"]
+    turns = {name: load(f"armadillo_100k_h100_issue48_step7_{name}.json")["warp"] for name in (
+        "pass1_base", "pass1_now", "pass2_base", "pass2_now")}
+    reach = load("armadillo_100k_h100_issue48_step7_reach_now.json")
+    numba7 = load("armadillo_100k_h100host_numba_issue48_step7_now.json")["numba"]
+    million = {(case, version): load(f"{case}_h100_issue48_step7_{version}.json")["warp"]
+               for case in ("armadillo_1m", "cube_1m") for version in ("base", "now")}
+    fraction = {(row["shape"], row["fraction"]): row for row in load("ahead_fraction_2core.json")["rows"]}
+    big, small = "armadillo (100k triangles)", ("unit cube", "unit square", "armadillo (20k triangles)")
+    work = {step: load(f"work_model_2core_armadillo_100k_issue48_{step}.json")["launches"]
+            for step in ("step6", "step7")}
+    peak7 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
+                            (RESULTS / "memory_h100_issue48_step7b.txt").read_text()))
+    cold7 = float(re.search(r"cache empty: ([0-9.]+) s", (RESULTS / "compile_h100_issue48_step7b.txt").read_text())[1])
+    step7_files = [f"armadillo_100k_h100_issue48_step7_{name}.json" for name in turns if name.endswith("base")]
+    step7_files += [f"{case}_h100_issue48_step7_base.json" for case in ("armadillo_1m", "cube_1m")]
+    step7_files += ["armadillo_100k_h100_issue48_step7b_base.json"]
+    step7_files += [f"armadillo_100k_h100_issue48_step7_{name}.json" for name in turns if name.endswith("now")]
+    step7_files += ["armadillo_100k_h100_issue48_step7_reach_now.json",
+                    "armadillo_100k_h100host_numba_issue48_step7_now.json",
+                    "armadillo_1m_h100_issue48_step7_now.json", "cube_1m_h100_issue48_step7_now.json",
+                    "square_1m_h100_issue48_step7_now.json", "profile_kernels_h100_armadillo_issue48_step7.json"]
+    step7_files += [f"{name}_issue48_step7b_now.json" for name in final]
+    step7_files += ["ahead_fraction_2core.json", "work_model_2core_armadillo_100k_issue48_step7.json"]
 
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
     before = load("profile_kernels_h100_armadillo_issue48_before.json")["warp"]
-    model = load("work_model_2core_armadillo_100k_issue48_step2.json")
-    gpu, predicted = model["against"], model["prediction"]
+    model7 = load("work_model_2core_armadillo_100k_issue48_step7.json")
+    gpu = model7["against"]
     fill = {(row["shape"], row["run"]): row["fill"] for row in load("policy_fill_2core_10k.json")["rows"]}
 
     def parts(run):
@@ -448,8 +461,8 @@ def scale_h100() -> list[str]:
         return [stages["setup"], moves, device - moves, stages["rounds"] - device, stages["verify"], run["median"]]
 
     names = ["set-up", "move launches", "other launches", "host, in the rounds", "final check", "whole call"]
-    guess = [predicted["setup"], predicted["moves"], predicted["other_launches"], predicted["host"],
-             predicted["verify"], predicted["seconds"]]
+    arm7_profiled = load("profile_kernels_h100_armadillo_issue48_step7.json")["warp"]
+    guess7 = [model7["prediction"][key] for key in ("setup", "moves", "other_launches", "host", "verify", "seconds")]
     model6 = load("work_model_2core_armadillo_100k_issue48_step6.json")
     arm6_profiled = load("profile_kernels_h100_armadillo_issue48_step6.json")["warp"]
     guess6 = [model6["prediction"][key] for key in ("setup", "moves", "other_launches", "host", "verify", "seconds")]
@@ -460,22 +473,22 @@ def scale_h100() -> list[str]:
     predicted4 = model4["prediction"]
     guess4 = [predicted4["setup"], predicted4["moves"], predicted4["other_launches"], predicted4["host"],
               predicted4["verify"], predicted4["seconds"]]
-    split = [[name, seconds(old), seconds(new), seconds(model_), seconds(new4), seconds(model4_), seconds(new5),
-              seconds(model5_), seconds(new6), seconds(model6_)]
-             for name, old, new, model_, new4, model4_, new5, model5_, new6, model6_ in zip(
-                 names, parts(before), parts(arm), guess, parts(arm3), guess4, parts(arm5_profiled), guess5,
-                 parts(arm6_profiled), guess6)]
+    split = [[name, seconds(old), seconds(new4), seconds(model4_), seconds(new5), seconds(model5_), seconds(new6),
+              seconds(model6_), seconds(new7), seconds(model7_)]
+             for name, old, new4, model4_, new5, model5_, new6, model6_, new7, model7_ in zip(
+                 names, parts(before), parts(arm3), guess4, parts(arm5_profiled), guess5, parts(arm6_profiled), guess6,
+                 parts(arm7_profiled), guess7)]
     rows = [
         ["armadillo (100k triangles)", "100,000", seconds(arm5["median"]), "", seconds(arm5_cpu["median"]),
-         f"{arm5['fill']:.4f}", "medians of 5 and 3, 8a198b3"],
+         f"{arm5['fill']:.4f}", "medians of 5 and 3, 1e767cb"],
         ["unit cube", "100,000", *[seconds(median_of(cube, backend=b)) for b in ("warp", "numba-cuda", "numba")],
          f"{median_of(cube, 'fill', backend='warp'):.4f}", "medians of 2, 4ea141e"],
         ["armadillo (100k triangles)", "1,000,000", seconds(arm5_1m["median"]), "", "",
-         f"{arm5_1m['fill']:.4f}", "median of 2, 8a198b3"],
+         f"{arm5_1m['fill']:.4f}", "median of 2, 1e767cb"],
         ["unit cube", "1,000,000", seconds(cube_1m["median"]), "", seconds(cube_1m_cpu["median"]),
-         f"{cube_1m['fill']:.4f}", "median of 2 (numba: 1), 8a198b3"],
+         f"{cube_1m['fill']:.4f}", "median of 2 (numba: 1), 1e767cb"],
         ["unit square", "1,000,000", seconds(square_1m["median"]), "", seconds(square_1m_cpu["median"]),
-         f"{square_1m['fill']:.4f}", "median of 2 (numba: 1), 8a198b3"],
+         f"{square_1m['fill']:.4f}", "median of 2 (numba: 1), 1e767cb"],
         ["unit cube", "10,000,000", seconds(warp_10m["seconds"]), "", "", f"{warp_10m['fill']:.4f}",
          "one run, e7f6fee"],
     ]
@@ -500,9 +513,9 @@ def scale_h100() -> list[str]:
         "model's predictions from an earlier run's constants and the work counted on 2 cores "
         f"(`bench/work_model.py`; same launches: {'yes' if gpu['same_launches'] else 'no'}):",
         "",
-        *table(["stage", "H100, before (e08d8b4)", "H100, 3ffe337", "predicted", "H200, cooperative (39d016d)",
-                "predicted (5d70ad2's constants)", "H200, the host's part (d7c0654)", "predicted (39d016d's)",
-                "H100, a launch's chain (bf23c2a)", "predicted (d7c0654's)"],
+        *table(["stage", "H100, before (e08d8b4)", "H200, cooperative (39d016d)", "predicted (5d70ad2's constants)",
+                "H200, the host's part (d7c0654)", "predicted (39d016d's)", "H100, a launch's chain (bf23c2a)",
+                "predicted (d7c0654's)", "H100, the host's work (1e767cb)", "predicted (d7c0654's)"],
                split),
         f"A move launch lasts as long as its slowest thread's chain ({1e6 * gpu['seconds_per_critical_node']:.2f} us a "
         f"node); the host's round takes {gpu['host_over_cpu']:.1f}x its 2-core time. The final check finds overlaps in "
@@ -519,49 +532,41 @@ def scale_h100() -> list[str]:
         "set-up is the constants' run's, before the cooperative set-up. A fresh machine's first packing of a mesh, "
         f"with the cooperative module to compile too: {cold['h100']:.1f} s (H100) and {cold['h200']:.1f} s (H200) "
         "([output](../bench/results/compile_h100_issue48_step4.txt)).",
-        "**A move launch's chain** (sixth step): the polish ahead runs the polish schedule's tail, from eps 3e-4 "
-        f"({tail[2]['polish_steps']} of its {tail[0]['polish_steps']} steps; with a GPU's policies on 2 cores the "
-        f"cube at 10,000 filled {tail_fill[('unit cube', 3e-4)]:.5f} against {tail_fill[('unit cube', None)]:.5f} "
-        f"with the whole schedule, the armadillo at 100,000 {tail_fill[('armadillo (100k triangles)', 3e-4)]:.5f} "
-        f"against {tail_fill[('armadillo (100k triangles)', None)]:.5f}: `python bench/ahead_tail.py`), a split's "
-        "two signed distances are a thread each, and a call's fixed costs (the cooling schedules computed once, the "
-        "bounds check in one query) are gone. On one H100 lease, against af1a36d: the armadillo at 100,000 "
-        + ", at a million ".join(
-            f"{seconds(chain[(case, 'base')]['warp']['median'])} before, "
-            f"{seconds(chain[(case, 'now')][key]['median'])} after" for case, key in
-            [("armadillo_100k", "warp now"), ("armadillo_1m", "warp")])
-        + " (the whole schedule ahead, same process: "
-        f"{seconds(chain[('armadillo_100k', 'now')]['warp ahead-whole']['median'])}), "
-        f"the cube at a million {seconds(chain[('cube_1m', 'base')]['warp']['median'])} before, "
-        f"{seconds(chain[('cube_1m', 'now')]['warp']['median'])} after; then without the fixed costs "
-        "(c93efeb against bf23c2a, the same spheres to the bit, "
-        "[output](../bench/results/same_spheres_h100_issue48_step6b.txt)): "
-        f"{seconds(step6['armadillo_100k_h100']['warp now']['median'])} against "
-        f"{seconds(chain[('armadillo_100k', 'base6b')]['warp']['median'])} at 100,000, and 7 more runs "
-        f"a median of {seconds(repeats6['median'])} "
-        f"({min(repeats6['unprofiled']):.2f}-{max(repeats6['unprofiled']):.2f} s). "
-        f"Warp's launches replayed (`wp.Launch`, {launch_cost['replay_us']:.0f} us a launch against "
-        f"{launch_cost['plain_us']:.0f} us on 2 cores: `python bench/launch_cost.py`) and restarts floored by "
-        "the best start so far (8a198b3, the same spheres to the bit) changed nothing that two more leases could "
-        f"see: on one, against c93efeb, {seconds(base6c['median'])} before and "
-        f"{seconds(final['armadillo_100k_h100']['warp now']['median'])} after in the measure's turn, then 7 runs "
-        f"each, one version after the other, {seconds(repeats6c['base']['median'])} and "
-        f"{seconds(repeats6c['now']['median'])}; on the other, in turns, {seconds(turns['pass1_base']['median'])} "
-        f"and {seconds(turns['pass2_base']['median'])} before, {seconds(turns['pass1_now']['median'])} and "
-        f"{seconds(turns['pass2_now']['median'])} after, then {seconds(arm5['median'])} beside numba's "
-        f"{seconds(arm5_cpu['median'])} (the table's). The same code's medians thus span "
-        f"{seconds(arm5['median'])}-{seconds(repeats6c['now']['median'])} across H100 leases. "
-        f"A fresh H100's first packing of a mesh: {cold6:.1f} s "
-        "([output](../bench/results/compile_h100_issue48_step6b.txt)); "
-        "its peak memory at a million (whole device, `STEP=step6 bash bench/gpu_issue48_step5.sh memory`): the "
-        f"armadillo {int(peak6['armadillo']):,} MiB, the cube {int(peak6['cube']):,} MiB "
-        "([output](../bench/results/memory_h100_issue48_step6.txt)).",
-        *sources(*step6_files, "profile_kernels_h100_armadillo_issue48_step2.json",
-                 "profile_kernels_h100host_numba_armadillo_issue48_step2.json",
-                 "round_time_h100_cube_issue20_step7.json",
+        "**A round's host work** (seventh step): the late finds' rule (a window of few candidates at the last "
+        "round's size takes the next level's too, `rounds.SMALL_ROUND`) runs in the window's query on the device, four "
+        "launches and one synchronisation where the host took three; an answer's first copy is twice the longer of its "
+        "kernel's last two; and the polish ahead reaches (1 - 0.2)^3 of the frontier, not (1 - 0.2)^2, as a window of "
+        "late finds reaches further down: with a GPU's policies on 2 cores (3 seeds) the armadillo at 100,000 made "
+        f"{sum(fraction[(big, 0.512)]['polish_launches']) / 3:.1f} polish launches a run, not "
+        f"{sum(fraction[(big, 0.64)]['polish_launches']) / 3:.1f}, each as long as a move launch's chain, and "
+        f"filled {fraction[(big, 0.512)]['fill']:.5f} against {fraction[(big, 0.64)]['fill']:.5f}; the cube, the "
+        "square and the 20k armadillo at 10,000 "
+        + ", ".join(f"{fraction[(name, 0.512)]['fill']:.5f} against {fraction[(name, 0.64)]['fill']:.5f}"
+                    for name in small)
+        + " (`python bench/ahead_tail.py --starts 3e-4 --fractions 0.64 0.512 0.4 --large-seeds 3`). The work model "
+        f"counts {work['step7']['syncs']} synchronisations and {work['step7']['launches']:,} launches at 100,000, "
+        f"against {work['step6']['syncs']} and {work['step6']['launches']:,}. On one H100 lease, in turns against "
+        f"9d800f2: {seconds(turns['pass1_base']['median'])} and {seconds(turns['pass2_base']['median'])} before, "
+        f"{seconds(turns['pass1_now']['median'])} and {seconds(turns['pass2_now']['median'])} after (numba "
+        f"{seconds(numba7['median'])}); in one process the old reach took "
+        f"{seconds(reach['warp reach-0.64']['median'])} and the new {seconds(reach['warp now']['median'])}, so the "
+        "reach made the gain, and the exact changes (with the old reach, 9d800f2's rounds and fill) none the lease "
+        "could see; "
+        f"the armadillo at a million {seconds(million[('armadillo_1m', 'base')]['median'])} before, "
+        f"{seconds(million[('armadillo_1m', 'now')]['median'])} after, the cube at a million "
+        f"{seconds(million[('cube_1m', 'base')]['median'])} before and "
+        f"{seconds(million[('cube_1m', 'now')]['median'])} after. "
+        f"On a second lease (the table's): {seconds(base7b['median'])} before. At 100,000 the GPU's packing fills "
+        f"{arm5['fill']:.5f} against 9d800f2's {base7b['fill']:.5f}. A fresh H100's first packing of a mesh: "
+        f"{cold7:.1f} s ([output](../bench/results/compile_h100_issue48_step7b.txt)); peak memory at a million (whole "
+        f"device): the armadillo {int(peak7['armadillo']):,} MiB, the cube {int(peak7['cube']):,} MiB "
+        "([output](../bench/results/memory_h100_issue48_step7b.txt)). The steps before, and the sixth's figures: "
+        "[benchmarks-history.md](benchmarks-history.md).",
+        *sources(*step7_files, "profile_kernels_h100_armadillo_issue48_step6.json",
+                 "work_model_2core_armadillo_100k_issue48_step6.json", "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
                  "work_model_2core_armadillo_100k_issue48_before.json",
-                 "work_model_2core_armadillo_100k_issue48_step2.json", "policy_fill_2core_10k.json",
+                 "policy_fill_2core_10k.json",
                  "profile_kernels_h200_armadillo_issue48_step4.json",
                  "profile_kernels_h200host_numba_armadillo_issue48_step4.json",
                  "million_h200_armadillo_issue48_step4.json", "profile_kernels_h200_armadillo_issue48_step3.json",
