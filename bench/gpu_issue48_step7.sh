@@ -15,6 +15,9 @@
 #        ndpack and this checkout's in turn (5 runs each), numba on the host's cores (3 runs); the armadillo,
 #        the unit cube and the unit square at 1,000,000 (2 runs each), numba on the cube and the square at
 #        1,000,000 (one run each); peak GPU memory at a million (bench/gpu_issue48_step5.sh memory)
+#   source .gpu2/setup.sh && STEP=step7c bash bench/gpu_issue48_step7.sh cuda  numba-cuda on the GPU (numpy 2.4
+#        carried: the image's 2.5 breaks its CUDA target): the backends' tests on the device, then the armadillo
+#        at 100,000 on Warp, numba-cuda and numba on the host's cores in one process (3 runs each)
 set -uo pipefail
 source bench/gpu_header.sh
 [ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
@@ -64,5 +67,11 @@ case "${1:-}" in
     kernels now "square_1m_${CARD}host_numba_issue48_${STEP}" --backends numba --square --count 1000000 --repeats 1
     bash bench/gpu_issue48_step5.sh memory
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step7.sh measure|final" >&2; exit 2 ;;
+  cuda)
+    timeout 300 python3 -m pytest -q -p no:cacheprovider tests/backends/test_backends.py -k "numba-cuda or device" \
+      2>&1 | tail -6 | tee "$OUT/gpu_tests_${CARD}_issue48_${STEP}.txt"
+    kernels now "armadillo_100k_${CARD}_backends_issue48_${STEP}" --backends warp numba-cuda numba \
+      --mesh /tmp/armadillo.obj --count 100000 --repeats 3
+    ;;
+  *) echo "usage: bash bench/gpu_issue48_step7.sh measure|final|cuda" >&2; exit 2 ;;
 esac
