@@ -143,6 +143,8 @@ SOURCES = {
         *[(f"{case}_issue48_step7b_now.json", "STEP=step7b bash bench/gpu_issue48_step7.sh final")
           for case in ("armadillo_100k_h100", "armadillo_100k_h100host_numba", "armadillo_1m_h100", "cube_1m_h100",
                        "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")]]},
+    "armadillo_100k_h100_backends_issue48_step7c_now.json": Source(
+        "H100", "1e767cb", "STEP=step7c bash bench/gpu_issue48_step7.sh cuda", "2026-11-27"),
     "ahead_fraction_2core.json": Source(
         "2 cores", "1e767cb", "python bench/ahead_tail.py --starts 3e-4 --fractions 0.64 0.512 0.4 --large-seeds 3"),
     "work_model_2core_armadillo_100k_issue48_step7.json": Source(
@@ -419,7 +421,11 @@ def scale_h100() -> list[str]:
     final = {name: load(f"{name}_issue48_step7b_now.json") for name in (
         "armadillo_100k_h100", "armadillo_100k_h100host_numba", "armadillo_1m_h100", "cube_1m_h100",
         "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")}
-    arm5, arm5_cpu = final["armadillo_100k_h100"]["warp"], final["armadillo_100k_h100host_numba"]["numba"]
+    backends7 = load("armadillo_100k_h100_backends_issue48_step7c_now.json")  # a third lease, NumPy 2.4 carried
+    arm5, arm5_cuda, arm5_cpu = backends7["warp"], backends7["numba-cuda"], backends7["numba"]
+    arm7b, arm7b_cpu = final["armadillo_100k_h100"]["warp"], final["armadillo_100k_h100host_numba"]["numba"]
+    cold_cuda = float(re.search(r"numba-cuda: first packing of a mesh, cache empty: ([0-9.]+) s",
+                                (RESULTS / "compile_h100_issue48_step7c.txt").read_text())[1])
     arm5_1m = final["armadillo_1m_h100"]["warp"]
     cube_1m, cube_1m_cpu = final["cube_1m_h100"]["warp"], final["cube_1m_h100host_numba"]["numba"]
     square_1m, square_1m_cpu = final["square_1m_h100"]["warp"], final["square_1m_h100host_numba"]["numba"]
@@ -446,7 +452,8 @@ def scale_h100() -> list[str]:
                     "armadillo_1m_h100_issue48_step7_now.json", "cube_1m_h100_issue48_step7_now.json",
                     "square_1m_h100_issue48_step7_now.json", "profile_kernels_h100_armadillo_issue48_step7.json"]
     step7_files += [f"{name}_issue48_step7b_now.json" for name in final]
-    step7_files += ["ahead_fraction_2core.json", "work_model_2core_armadillo_100k_issue48_step7.json"]
+    step7_files += ["armadillo_100k_h100_backends_issue48_step7c_now.json", "ahead_fraction_2core.json",
+                    "work_model_2core_armadillo_100k_issue48_step7.json"]
 
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
     before = load("profile_kernels_h100_armadillo_issue48_before.json")["warp"]
@@ -479,8 +486,8 @@ def scale_h100() -> list[str]:
                  names, parts(before), parts(arm3), guess4, parts(arm5_profiled), guess5, parts(arm6_profiled), guess6,
                  parts(arm7_profiled), guess7)]
     rows = [
-        ["armadillo (100k triangles)", "100,000", seconds(arm5["median"]), "", seconds(arm5_cpu["median"]),
-         f"{arm5['fill']:.4f}", "medians of 5 and 3, 1e767cb"],
+        ["armadillo (100k triangles)", "100,000", seconds(arm5["median"]), seconds(arm5_cuda["median"]),
+         seconds(arm5_cpu["median"]), f"{arm5['fill']:.4f}", "medians of 3, 1e767cb (NumPy 2.4)"],
         ["unit cube", "100,000", *[seconds(median_of(cube, backend=b)) for b in ("warp", "numba-cuda", "numba")],
          f"{median_of(cube, 'fill', backend='warp'):.4f}", "medians of 2, 4ea141e"],
         ["armadillo (100k triangles)", "1,000,000", seconds(arm5_1m["median"]), "", "",
@@ -500,11 +507,12 @@ def scale_h100() -> list[str]:
         "## Packing at scale: H100 (and H200)",
         "",
         "Fast mode, seed 0: seconds of the whole `nd.pack` call, the final float64 check included, the compile apart",
-        "(a warm-up packing first). numba-cuda was not run on 3ffe337 or later (the image's NumPy 2.5 breaks it).",
+        "(a warm-up packing first). numba-cuda needs NumPy 2.4, carried to the GPU machine (its image's 2.5 breaks "
+        "numba-cuda's CUDA target): it was not run from 3ffe337 to 9d800f2.",
         "",
         *table(head, rows),
         f"Warp is {arm5_cpu['median'] / arm5['median']:.1f}x the host's 16 cores on the armadillo at "
-        "100,000, "
+        f"100,000 (numba-cuda {arm5_cpu['median'] / arm5_cuda['median']:.1f}x), "
         f"{cube_1m_cpu['median'] / cube_1m['median']:.1f}x on the cube and "
         f"{square_1m_cpu['median'] / square_1m['median']:.1f}x on the square at a million (goals: 5x; 1 s, 8 s, 5 s). "
         f"A GPU's fast mode fills at 10,000 spheres this fraction of the faithful mode's: {policy}.",
@@ -556,7 +564,13 @@ def scale_h100() -> list[str]:
         f"{seconds(million[('armadillo_1m', 'now')]['median'])} after, the cube at a million "
         f"{seconds(million[('cube_1m', 'base')]['median'])} before and "
         f"{seconds(million[('cube_1m', 'now')]['median'])} after. "
-        f"On a second lease (the table's): {seconds(base7b['median'])} before. At 100,000 the GPU's packing fills "
+        f"On a second lease (the million rows'): {seconds(base7b['median'])} before, {seconds(arm7b['median'])} after, "
+        f"numba {seconds(arm7b_cpu['median'])}. On a third, with NumPy 2.4 carried (the table's first row), numba-cuda "
+        f"took {seconds(arm5_cuda['median'])} (the same rounds as Warp; no cooperative walks: Warp's tiles have no "
+        "numba-cuda counterpart yet), and its tests pass on the H100 "
+        "([output](../bench/results/gpu_tests_h100_issue48_step7c.txt)); its first packing of a mesh on a fresh "
+        f"machine {cold_cuda:.1f} s ([output](../bench/results/compile_h100_issue48_step7c.txt)). "
+        "At 100,000 the GPU's packing fills "
         f"{arm5['fill']:.5f} against 9d800f2's {base7b['fill']:.5f}. A fresh H100's first packing of a mesh: "
         f"{cold7:.1f} s ([output](../bench/results/compile_h100_issue48_step7b.txt)); peak memory at a million (whole "
         f"device): the armadillo {int(peak7['armadillo']):,} MiB, the cube {int(peak7['cube']):,} MiB "

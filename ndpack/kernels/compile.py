@@ -52,8 +52,12 @@ MODULES: dict[str, int] = {}
 #: pack armadillo.obj -n 3 --backend numba``), 7.4 s for the mesh queries on an H200's host; Warp
 #: on an H200 3.3 s for the 3-D meshes' kernels and 2.5 s for their cooperative moves (at
 #: ``WARP_OPTIMIZATION``, the driver's compile of the PTX included;
-#: bench/results/compile_times_h200_issue48_step4.json). So the estimates are within 2x of each.
-TYPICAL_SECONDS = {"numba": 8, "numba-cuda": 40, "warp": 6, "warp on a GPU": 4}
+#: bench/results/compile_times_h200_issue48_step4.json). On an H100's host Numba took 6.0-8.5 s for
+#: the mesh queries, 8.1 s for the 2-D shapes, 8.3 s for the 3-D shapes and 16.0 s for 3-D shapes and
+#: meshes, and numba-cuda 41.6 s for the armadillo's kernels (its first packing, 50.1 s, less the
+#: mesh queries' 8.5 s; bench/results/compile_h100_issue48_step7c.txt). So the estimates are within
+#: 2x of each.
+TYPICAL_SECONDS = {"numba": 10, "numba-cuda": 40, "warp": 6, "warp on a GPU": 4}
 #: Warp's CUDA optimisation level for ndpack's modules. At Warp's default (3) a fresh H100's first
 #: packing of a mesh compiled for 90 s (most of it the driver compiling Warp's PTX) and packed the
 #: armadillo's 100,000 spheres in 2.07 s; at 2, 3 s and 2.00 s (medians of 3, the driver's cache
@@ -410,24 +414,35 @@ def _listen() -> None:
 
 class CudaKernel:
     """A numba-cuda kernel that, at its first launch in this process, announces (and counts) a
-    compile where Numba's disk cache holds nothing of it yet. (numba-cuda has no compile event
-    that a listener can use.)"""
+    compile where Numba's disk cache holds nothing of it yet, and times that launch, which
+    compiles it: the kernels' times add up to the next notice's estimate for their title, as
+    the CPU kernels' do. (numba-cuda has no compile event that a listener can use.)"""
 
     def __init__(self, kernel):
         self.kernel = kernel
         self._checked = False
 
     def __getitem__(self, config):
-        if not self._checked:
-            self._checked = True
-            module = getattr(getattr(self.kernel, "py_func", None), "__module__", "")
-            if not self._cached():
-                COMPILES["numba-cuda"] = COMPILES.get("numba-cuda", 0) + 1
-                title = _titles.get(module, "shapes")
-                if title not in _announced_cuda:
-                    _announced_cuda.add(title)
-                    announce("numba-cuda", title)
-        return self.kernel[config]
+        launch = self.kernel[config]
+        if self._checked:
+            return launch
+        self._checked = True
+        if self._cached():
+            return launch
+        COMPILES["numba-cuda"] = COMPILES.get("numba-cuda", 0) + 1
+        title = _titles.get(getattr(getattr(self.kernel, "py_func", None), "__module__", ""), "shapes")
+        if title not in _announced_cuda:
+            _announced_cuda.add(title)
+            announce("numba-cuda", title)
+
+        def compiling(*args):
+            started = time.perf_counter()
+            result = launch(*args)  # compiles, then queues the launch
+            _cuda_seconds[title] = _cuda_seconds.get(title, 0.0) + time.perf_counter() - started
+            _record("numba-cuda", _cuda_seconds[title], title)
+            return result
+
+        return compiling
 
     def _cached(self) -> bool:
         cache = getattr(self.kernel, "_cache", None)
@@ -439,6 +454,7 @@ class CudaKernel:
 
 
 _announced_cuda: set[str] = set()
+_cuda_seconds: dict[str, float] = {}  # a title -> its numba-cuda kernels' compile time in this process
 
 
 # ---------------------------------------------------------------------------------- Numba

@@ -20,6 +20,7 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -461,3 +462,43 @@ def test_warp_modules_compile_at_ndpacks_optimisation_level():
     program = compiled_program(nd.Ball(np.zeros(3), 1.0)).program
     module = kernel_compile.warp_module(program, "float64", "")
     assert f"'optimization_level': {kernel_compile.WARP_OPTIMIZATION}" in Path(module.__file__).read_text()
+
+
+def test_a_numba_cuda_kernels_first_launch_is_timed_for_the_next_notice(tmp_path, monkeypatch):
+    """numba-cuda compiles a kernel at its first launch (it has no compile event): where Numba's
+    disk cache holds nothing of it, that launch is announced once per title and timed, the
+    kernels' times adding up to the next notice's estimate for the title; later launches and a
+    cached kernel are left alone."""
+    monkeypatch.setenv("NDPACK_CACHE", str(tmp_path))
+    notices, launched = [], []
+    monkeypatch.setattr(kernel_compile, "notice", notices.append)
+    monkeypatch.setattr(kernel_compile, "_announced_cuda", set())
+    monkeypatch.setattr(kernel_compile, "_cuda_seconds", {})
+    monkeypatch.setitem(kernel_compile._titles, "fake_cuda_module", "fake kernels")
+
+    def py_func():
+        pass
+
+    py_func.__module__ = "fake_cuda_module"
+
+    class Fake:  # what CudaKernel reads of a numba-cuda kernel
+        def __init__(self, index_path):
+            self.py_func = py_func
+            self._cache = SimpleNamespace(_cache_file=SimpleNamespace(_index_path=str(index_path)))
+
+        def __getitem__(self, config):
+            return lambda *args: launched.append((config, args))
+
+    cached_index = tmp_path / "cached.nbi"
+    cached_index.write_text("")
+    fresh = [kernel_compile.CudaKernel(Fake(tmp_path / f"missing{k}.nbi")) for k in range(2)]
+    cached = kernel_compile.CudaKernel(Fake(cached_index))
+    for kernel in (*fresh, cached, *fresh):
+        kernel[1, 32](7)
+    assert len(launched) == 5 and len(notices) == 1 and "numba-cuda kernels for fake kernels" in notices[0]
+    times = kernel_compile._measured()
+    assert "numba-cuda: fake kernels" in times and kernel_compile._cuda_seconds.keys() == {"fake kernels"}
+    kernel_compile._record("numba-cuda", 41.6, "fake kernels")  # as a machine's real compile records it
+    monkeypatch.setattr(kernel_compile, "_announced_cuda", set())
+    kernel_compile.CudaKernel(Fake(tmp_path / "missing2.nbi"))[1, 32](8)
+    assert "about 42 s" in notices[-1], notices
