@@ -1,7 +1,8 @@
-"""Warp's compile options against the first compile's time and the packing's (issue 48).
+"""A GPU backend's compile options against the first compile's time and the packing's (issue 48).
 
     python3 bench/compile_options.py --mesh armadillo.obj --variants ndpack O3 O1 unroll-4 \\
         --out compile_options_h100.json
+    python3 bench/compile_options.py --backend numba-cuda --mesh armadillo.obj --variants ndpack cuda-noopt
 
 Each variant runs in a fresh process with an empty cache (``NDPACK_CACHE`` and Warp's kernel cache
 in a new folder, and the CUDA driver's cache of compiled PTX off: ``CUDA_CACHE_DISABLE``; where
@@ -14,7 +15,8 @@ kernels are made: ``ndpack`` changes nothing, ``O<n>`` the CUDA optimisation lev
 ask for (``kernels.compile.WARP_OPTIMIZATION``; Warp's default is 3), ``unroll-<n>`` Warp's most
 unrolled loop iterations (``wp.config.max_unroll``, 16 by default). (The results of issue 48 were
 measured before ndpack set a level: their ``default`` is Warp's, 3, and ``O2`` was set through
-Warp's global configuration.)
+Warp's global configuration.) For numba-cuda (``--backend numba-cuda``), ``cuda-noopt`` compiles its kernels
+without NVVM's optimisation (``numba_cuda_backend.CUDA_OPT``).
 """
 
 from __future__ import annotations
@@ -33,9 +35,14 @@ from _common import last_json, machine_info, write_json
 
 
 def configure(variant: str) -> None:
-    import warp as wp
-
     from ndpack.kernels import compile as kernel_compile
+
+    if variant == "cuda-noopt":
+        from ndpack.backends import numba_cuda_backend
+
+        numba_cuda_backend.CUDA_OPT = False
+        return
+    import warp as wp
 
     if variant.startswith("O"):
         kernel_compile.WARP_OPTIMIZATION = int(variant[1:])
@@ -52,25 +59,28 @@ def child(args) -> None:
 
     shape = nd.TriangleMesh.load(args.mesh)
     started = time.perf_counter()
-    nd.pack(shape, 3, backend="warp", mode="fast", progress=False)
+    nd.pack(shape, 3, backend=args.backend, mode="fast", progress=False)
     first = time.perf_counter() - started
     times, fill = [], None
     for _ in range(args.repeats):
         started = time.perf_counter()
-        packing = nd.pack(shape, args.count, backend="warp", mode="fast", seed=0, progress=False)
+        packing = nd.pack(shape, args.count, backend=args.backend, mode="fast", seed=0, progress=False)
         times.append(time.perf_counter() - started)
         fill = float(packing.fill)
     compiles = json.loads((cache_root() / "compile-times.json").read_text())
-    import warp as wp
+    row = dict(backend=args.backend, variant=args.child, first_packing_s=first, compiles=compiles, seconds=times,
+               median_s=statistics.median(times), fill=fill)
+    if args.backend == "warp":
+        import warp as wp
 
-    print(json.dumps(dict(variant=args.child, first_packing_s=first, compiles=compiles, seconds=times,
-                          cuda_output=str(wp.config.cuda_output), ptx_target_arch=str(wp.config.ptx_target_arch),
-                          median_s=statistics.median(times), fill=fill)))
+        row.update(cuda_output=str(wp.config.cuda_output), ptx_target_arch=str(wp.config.ptx_target_arch))
+    print(json.dumps(row))
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--mesh", required=True)
+    parser.add_argument("--backend", default="warp", choices=["warp", "numba-cuda"])
     parser.add_argument("--variants", nargs="+", default=["ndpack", "O3"])
     parser.add_argument("--count", type=int, default=100_000)
     parser.add_argument("--repeats", type=int, default=3)
@@ -85,8 +95,8 @@ def main():
             env = dict(os.environ, NDPACK_CACHE=cache, WARP_CACHE_PATH=str(Path(cache) / "warp"),
                        CUDA_CACHE_DISABLE="1")
             done = subprocess.run([sys.executable, __file__, "--child", variant, "--mesh", args.mesh, "--count",
-                                   str(args.count), "--repeats", str(args.repeats)], env=env, capture_output=True,
-                                  text=True)
+                                   str(args.count), "--repeats", str(args.repeats), "--backend", args.backend],
+                                  env=env, capture_output=True, text=True)
             if done.returncode:
                 print(done.stderr[-3000:], file=sys.stderr)
                 continue

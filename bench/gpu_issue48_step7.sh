@@ -18,6 +18,8 @@
 #   source .gpu2/setup.sh && STEP=step7c bash bench/gpu_issue48_step7.sh cuda  numba-cuda on the GPU (numpy 2.4
 #        carried: the image's 2.5 breaks its CUDA target): the backends' tests on the device, then the armadillo
 #        at 100,000 on Warp, numba-cuda and numba on the host's cores in one process (3 runs each)
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step7.sh cuda-compile  numba-cuda's first compile of a mesh's
+#        kernels with NVVM's optimisation and without (bench/compile_options.py), and the armadillo at 100,000 with each
 set -uo pipefail
 source bench/gpu_header.sh
 [ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
@@ -73,5 +75,9 @@ case "${1:-}" in
     kernels now "armadillo_100k_${CARD}_backends_issue48_${STEP}" --backends warp numba-cuda numba \
       --mesh /tmp/armadillo.obj --count 100000 --repeats 3
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step7.sh measure|final|cuda" >&2; exit 2 ;;
+  cuda-compile)
+    timeout 500 python3 bench/compile_options.py --backend numba-cuda --mesh /tmp/armadillo.obj \
+      --variants ndpack cuda-noopt --out "$OUT/compile_options_${CARD}_numba_cuda_issue48.json" 2>&1 | grep -v "^Warp"
+    ;;
+  *) echo "usage: bash bench/gpu_issue48_step7.sh measure|final|cuda|cuda-compile" >&2; exit 2 ;;
 esac

@@ -299,6 +299,8 @@ ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touc
                "near_finish", "move_ids", "set_floats", "lower_floats", "split_mark",
                "split_cut", "cell_distances", "index_clear", "index_insert_range")
 THREADS_PER_BLOCK = 128
+#: NVVM's optimisation of the kernels (numba-cuda's ``opt``; Numba's default is on).
+CUDA_OPT = True
 
 
 class NumbaCudaBackend(Backend):
@@ -342,7 +344,7 @@ class NumbaCudaBackend(Backend):
         cuda = self.cuda
         for name in names:
             if name in ENTRY_NAMES:  # kept on disk, with the device functions compiled into them
-                namespace[name] = CudaKernel(cuda.jit(cache=True)(namespace[name]))
+                namespace[name] = CudaKernel(cuda.jit(cache=True, opt=CUDA_OPT)(namespace[name]))
             else:
                 namespace[name] = cuda.jit(device=True)(namespace[name])
 
