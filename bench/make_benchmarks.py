@@ -145,6 +145,8 @@ SOURCES = {
                        "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")]]},
     "armadillo_100k_h100_backends_issue48_step7c_now.json": Source(
         "H100", "1e767cb", "STEP=step7c bash bench/gpu_issue48_step7.sh cuda", "2026-11-27"),
+    "compile_options_h100_numba_cuda_issue48.json": Source(
+        "H100", "e785e8a", "bash bench/gpu_issue48_step7.sh cuda-compile", "2026-11-27"),
     "ahead_fraction_2core.json": Source(
         "2 cores", "1e767cb", "python bench/ahead_tail.py --starts 3e-4 --fractions 0.64 0.512 0.4 --large-seeds 3"),
     "work_model_2core_armadillo_100k_issue48_step7.json": Source(
@@ -424,6 +426,8 @@ def scale_h100() -> list[str]:
     backends7 = load("armadillo_100k_h100_backends_issue48_step7c_now.json")  # a third lease, NumPy 2.4 carried
     arm5, arm5_cuda, arm5_cpu = backends7["warp"], backends7["numba-cuda"], backends7["numba"]
     arm7b, arm7b_cpu = final["armadillo_100k_h100"]["warp"], final["armadillo_100k_h100host_numba"]["numba"]
+    cuda_opt, cuda_noopt = (first(load("compile_options_h100_numba_cuda_issue48.json")["rows"], variant=variant)
+                            for variant in ("ndpack", "cuda-noopt"))
     cold_cuda = float(re.search(r"numba-cuda: first packing of a mesh, cache empty: ([0-9.]+) s",
                                 (RESULTS / "compile_h100_issue48_step7c.txt").read_text())[1])
     arm5_1m = final["armadillo_1m_h100"]["warp"]
@@ -452,7 +456,8 @@ def scale_h100() -> list[str]:
                     "armadillo_1m_h100_issue48_step7_now.json", "cube_1m_h100_issue48_step7_now.json",
                     "square_1m_h100_issue48_step7_now.json", "profile_kernels_h100_armadillo_issue48_step7.json"]
     step7_files += [f"{name}_issue48_step7b_now.json" for name in final]
-    step7_files += ["armadillo_100k_h100_backends_issue48_step7c_now.json", "ahead_fraction_2core.json",
+    step7_files += ["armadillo_100k_h100_backends_issue48_step7c_now.json",
+                    "compile_options_h100_numba_cuda_issue48.json", "ahead_fraction_2core.json",
                     "work_model_2core_armadillo_100k_issue48_step7.json"]
 
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
@@ -569,7 +574,11 @@ def scale_h100() -> list[str]:
         f"took {seconds(arm5_cuda['median'])} (the same rounds as Warp; no cooperative walks: Warp's tiles have no "
         "numba-cuda counterpart yet), and its tests pass on the H100 "
         "([output](../bench/results/gpu_tests_h100_issue48_step7c.txt)); its first packing of a mesh on a fresh "
-        f"machine {cold_cuda:.1f} s ([output](../bench/results/compile_h100_issue48_step7c.txt)). "
+        f"machine {cold_cuda:.1f} s ([output](../bench/results/compile_h100_issue48_step7c.txt)); without NVVM's "
+        f"optimisation (ndpack's setting since) its kernels compiled in {cuda_noopt['compiles']['numba-cuda']:.0f} s "
+        f"against {cuda_opt['compiles']['numba-cuda']:.0f} s on a fourth lease, and packed as fast "
+        f"({seconds(cuda_noopt['median_s'])} against {seconds(cuda_opt['median_s'])}; "
+        "`bash bench/gpu_issue48_step7.sh cuda-compile`). "
         "At 100,000 the GPU's packing fills "
         f"{arm5['fill']:.5f} against 9d800f2's {base7b['fill']:.5f}. A fresh H100's first packing of a mesh: "
         f"{cold7:.1f} s ([output](../bench/results/compile_h100_issue48_step7b.txt)); peak memory at a million (whole "
@@ -579,7 +588,6 @@ def scale_h100() -> list[str]:
         *sources(*step7_files, "profile_kernels_h100_armadillo_issue48_step6.json",
                  "work_model_2core_armadillo_100k_issue48_step6.json", "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
-                 "work_model_2core_armadillo_100k_issue48_before.json",
                  "policy_fill_2core_10k.json",
                  "profile_kernels_h200_armadillo_issue48_step4.json",
                  "profile_kernels_h200host_numba_armadillo_issue48_step4.json",

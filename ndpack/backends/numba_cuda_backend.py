@@ -299,8 +299,11 @@ ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touc
                "near_finish", "move_ids", "set_floats", "lower_floats", "split_mark",
                "split_cut", "cell_distances", "index_clear", "index_insert_range")
 THREADS_PER_BLOCK = 128
-#: NVVM's optimisation of the kernels (numba-cuda's ``opt``; Numba's default is on).
-CUDA_OPT = True
+#: NVVM's optimisation of the kernels (numba-cuda's ``opt``; Numba's default is on). Off, a fresh H100's
+#: first compile of the armadillo's kernels took 58 s against 77 s, and 100,000 spheres 1.45 s against
+#: 1.50 s (medians of 3, the same packing; ``bash bench/gpu_issue48_step7.sh cuda-compile``): the time
+#: goes to Numba's typing and lowering of the inlined mesh walk more than to NVVM.
+CUDA_OPT = False
 
 
 class NumbaCudaBackend(Backend):
