@@ -15,7 +15,8 @@
 #        ndpack and this checkout's in turn (5 runs each), numba on the host's cores (3 runs); the armadillo,
 #        the unit cube and the unit square at 1,000,000 (2 runs each), numba on the cube and the square at
 #        1,000,000 (one run each); peak GPU memory at a million (bench/gpu_issue48_step5.sh memory)
-#   source .gpu2/setup.sh && STEP=step7c bash bench/gpu_issue48_step7.sh cuda  numba-cuda on the GPU (numpy 2.4
+#   source .gpu2/setup.sh && STEP=step7c bash bench/gpu_issue48_step7.sh cuda  numba-cuda on the GPU (numpy 2.4, by
+#        bash bench/gpu_stage_numpy.sh before run 1,
 #        carried: the image's 2.5 breaks its CUDA target): the backends' tests on the device, then the armadillo
 #        at 100,000 on Warp, numba-cuda and numba on the host's cores in one process (3 runs each)
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step7.sh cuda-compile  numba-cuda's first compile of a mesh's
