@@ -323,6 +323,15 @@ class NumbaCudaBackend(Backend):
 
         # Small launches (a few touched prototypes) are expected; their occupancy warning is noise.
         numba.config.CUDA_LOW_OCCUPANCY_WARNINGS = 0
+        if not numba.config.ENABLE_CUDASIM and not hasattr(np, "row_stack"):
+            # Else the first kernel's compile fails deep inside numba-cuda (an H100 image's NumPy 2.5).
+            from importlib.metadata import version
+
+            raise BackendError(
+                f"numba-cuda {version('numba-cuda')} cannot compile kernels with NumPy {np.__version__}: it "
+                "needs np.row_stack, which NumPy 2.5 removed; install 'numpy<2.5' or a numba-cuda release that "
+                "supports this NumPy, or use backend='warp'"
+            )
         if not cuda.is_available():
             raise BackendError(
                 "numba-cuda found no usable CUDA GPU (driver or device missing); set "

@@ -626,6 +626,20 @@ def test_missing_framework_says_how_to_install(monkeypatch):
         backends.get_backend("warp")
 
 
+def test_numba_cuda_with_a_numpy_it_cannot_compile_with_says_what_to_install(monkeypatch):
+    """numba-cuda 0.30 overloads ``np.row_stack`` when it first compiles, and NumPy 2.5 removed it
+    (an H100 image's NumPy): the backend says so when it is made, not in a traceback from deep in
+    its first compile, and the automatic choice goes on to another backend."""
+    numba = pytest.importorskip("numba")
+    pytest.importorskip("numba_cuda")
+    from ndpack.backends.numba_cuda_backend import NumbaCudaBackend
+
+    monkeypatch.setattr(numba.config, "ENABLE_CUDASIM", 0)
+    monkeypatch.delattr(np, "row_stack", raising=False)
+    with pytest.raises(BackendError, match=r"numba-cuda .* NumPy .*np\.row_stack.*'numpy<2\.5'.*backend='warp'"):
+        NumbaCudaBackend()
+
+
 def test_a_missing_gpu_package_is_a_backend_error_and_auto_choice_goes_on(monkeypatch):
     monkeypatch.setattr(backends, "_instances", {})
     monkeypatch.setitem(sys.modules, "warp", None)  # import warp now raises ImportError
