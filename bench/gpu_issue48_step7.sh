@@ -19,6 +19,8 @@
 #        bash bench/gpu_stage_numpy.sh before run 1,
 #        carried: the image's 2.5 breaks its CUDA target): the backends' tests on the device, then the armadillo
 #        at 100,000 on Warp, numba-cuda and numba on the host's cores in one process (3 runs each)
+#   source .gpu2/setup.sh && STEP=step7c bash bench/gpu_issue48_step7.sh cuda-million  numba-cuda beside Warp at
+#        1,000,000 in one process each (numpy 2.4 carried): the armadillo, the unit cube and the unit square (2 runs)
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step7.sh cuda-compile  numba-cuda's first compile of a mesh's
 #        kernels with NVVM's optimisation and without (bench/compile_options.py), and the armadillo at 100,000 with each
 set -uo pipefail
@@ -76,9 +78,16 @@ case "${1:-}" in
     kernels now "armadillo_100k_${CARD}_backends_issue48_${STEP}" --backends warp numba-cuda numba \
       --mesh /tmp/armadillo.obj --count 100000 --repeats 3
     ;;
+  cuda-million)
+    kernels now "armadillo_1m_${CARD}_backends_issue48_${STEP}" --backends warp numba-cuda --mesh /tmp/armadillo.obj \
+      --count 1000000 --repeats 2
+    kernels now "cube_1m_${CARD}_backends_issue48_${STEP}" --backends warp numba-cuda --count 1000000 --repeats 2
+    kernels now "square_1m_${CARD}_backends_issue48_${STEP}" --backends warp numba-cuda --square --count 1000000 \
+      --repeats 2
+    ;;
   cuda-compile)
     timeout 500 python3 bench/compile_options.py --backend numba-cuda --mesh /tmp/armadillo.obj \
       --variants ndpack cuda-noopt --out "$OUT/compile_options_${CARD}_numba_cuda_issue48.json" 2>&1 | grep -v "^Warp"
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step7.sh measure|final|cuda|cuda-compile" >&2; exit 2 ;;
+  *) echo "usage: bash bench/gpu_issue48_step7.sh measure|final|cuda|cuda-million|cuda-compile" >&2; exit 2 ;;
 esac
