@@ -145,6 +145,9 @@ SOURCES = {
                        "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")]]},
     "armadillo_100k_h100_backends_issue48_step7c_now.json": Source(
         "H100", "1e767cb", "STEP=step7c bash bench/gpu_issue48_step7.sh cuda", "2026-11-27"),
+    **{f"{case}_1m_h100_backends_issue48_step7c_now.json": Source(
+        "H100", "6b13fee", "STEP=step7c bash bench/gpu_issue48_step7.sh cuda-million", "2026-11-27")
+       for case in ("armadillo", "cube", "square")},
     "compile_options_h100_numba_cuda_issue48.json": Source(
         "H100", "e785e8a", "bash bench/gpu_issue48_step7.sh cuda-compile", "2026-11-27"),
     "ahead_fraction_2core.json": Source(
@@ -428,6 +431,8 @@ def scale_h100() -> list[str]:
     arm7b, arm7b_cpu = final["armadillo_100k_h100"]["warp"], final["armadillo_100k_h100host_numba"]["numba"]
     cuda_opt, cuda_noopt = (first(load("compile_options_h100_numba_cuda_issue48.json")["rows"], variant=variant)
                             for variant in ("ndpack", "cuda-noopt"))
+    million_cuda = {case: load(f"{case}_1m_h100_backends_issue48_step7c_now.json")
+                    for case in ("armadillo", "cube", "square")}
     cold_cuda = float(re.search(r"numba-cuda: first packing of a mesh, cache empty: ([0-9.]+) s",
                                 (RESULTS / "compile_h100_issue48_step7c.txt").read_text())[1])
     arm5_1m = final["armadillo_1m_h100"]["warp"]
@@ -456,6 +461,7 @@ def scale_h100() -> list[str]:
                     "armadillo_1m_h100_issue48_step7_now.json", "cube_1m_h100_issue48_step7_now.json",
                     "square_1m_h100_issue48_step7_now.json", "profile_kernels_h100_armadillo_issue48_step7.json"]
     step7_files += [f"{name}_issue48_step7b_now.json" for name in final]
+    step7_files += [f"{case}_1m_h100_backends_issue48_step7c_now.json" for case in ("armadillo", "cube", "square")]
     step7_files += ["armadillo_100k_h100_backends_issue48_step7c_now.json",
                     "compile_options_h100_numba_cuda_issue48.json", "ahead_fraction_2core.json",
                     "work_model_2core_armadillo_100k_issue48_step7.json"]
@@ -475,9 +481,6 @@ def scale_h100() -> list[str]:
     names = ["set-up", "move launches", "other launches", "host, in the rounds", "final check", "whole call"]
     arm7_profiled = load("profile_kernels_h100_armadillo_issue48_step7.json")["warp"]
     guess7 = [model7["prediction"][key] for key in ("setup", "moves", "other_launches", "host", "verify", "seconds")]
-    model6 = load("work_model_2core_armadillo_100k_issue48_step6.json")
-    arm6_profiled = load("profile_kernels_h100_armadillo_issue48_step6.json")["warp"]
-    guess6 = [model6["prediction"][key] for key in ("setup", "moves", "other_launches", "host", "verify", "seconds")]
     model5 = load("work_model_2core_armadillo_100k_issue48_step5.json")
     arm5_profiled = load("profile_kernels_h200_armadillo_issue48_step5.json")["warp"]
     predicted5 = model5["prediction"]
@@ -485,11 +488,10 @@ def scale_h100() -> list[str]:
     predicted4 = model4["prediction"]
     guess4 = [predicted4["setup"], predicted4["moves"], predicted4["other_launches"], predicted4["host"],
               predicted4["verify"], predicted4["seconds"]]
-    split = [[name, seconds(old), seconds(new4), seconds(model4_), seconds(new5), seconds(model5_), seconds(new6),
-              seconds(model6_), seconds(new7), seconds(model7_)]
-             for name, old, new4, model4_, new5, model5_, new6, model6_, new7, model7_ in zip(
-                 names, parts(before), parts(arm3), guess4, parts(arm5_profiled), guess5, parts(arm6_profiled), guess6,
-                 parts(arm7_profiled), guess7)]
+    split = [[name, seconds(old), seconds(new4), seconds(model4_), seconds(new5), seconds(model5_), seconds(new7),
+              seconds(model7_)]
+             for name, old, new4, model4_, new5, model5_, new7, model7_ in zip(
+                 names, parts(before), parts(arm3), guess4, parts(arm5_profiled), guess5, parts(arm7_profiled), guess7)]
     rows = [
         ["armadillo (100k triangles)", "100,000", seconds(arm5["median"]), seconds(arm5_cuda["median"]),
          seconds(arm5_cpu["median"]), f"{arm5['fill']:.4f}", "medians of 3, 1e767cb (NumPy 2.4)"],
@@ -527,8 +529,8 @@ def scale_h100() -> list[str]:
         f"(`bench/work_model.py`; same launches: {'yes' if gpu['same_launches'] else 'no'}):",
         "",
         *table(["stage", "H100, before (e08d8b4)", "H200, cooperative (39d016d)", "predicted (5d70ad2's constants)",
-                "H200, the host's part (d7c0654)", "predicted (39d016d's)", "H100, a launch's chain (bf23c2a)",
-                "predicted (d7c0654's)", "H100, the host's work (1e767cb)", "predicted (d7c0654's)"],
+                "H200, the host's part (d7c0654)", "predicted (39d016d's)", "H100, the host's work (1e767cb)",
+                "predicted (d7c0654's)"],
                split),
         f"A move launch lasts as long as its slowest thread's chain ({1e6 * gpu['seconds_per_critical_node']:.2f} us a "
         f"node); the host's round takes {gpu['host_over_cpu']:.1f}x its 2-core time. The final check finds overlaps in "
@@ -578,15 +580,19 @@ def scale_h100() -> list[str]:
         f"optimisation (ndpack's setting since) its kernels compiled in {cuda_noopt['compiles']['numba-cuda']:.0f} s "
         f"against {cuda_opt['compiles']['numba-cuda']:.0f} s on a fourth lease, and packed as fast "
         f"({seconds(cuda_noopt['median_s'])} against {seconds(cuda_opt['median_s'])}; "
-        "`bash bench/gpu_issue48_step7.sh cuda-compile`). "
+        "`bash bench/gpu_issue48_step7.sh cuda-compile`). At a million, beside Warp in one process (another lease), "
+        "numba-cuda took "
+        + ", ".join(f"{seconds(million_cuda[case]['numba-cuda']['median'])} for the {name} (Warp "
+                    f"{seconds(million_cuda[case]['warp']['median'])})"
+                    for case, name in (("armadillo", "armadillo"), ("cube", "cube"), ("square", "square")))
+        + " (`STEP=step7c bash bench/gpu_issue48_step7.sh cuda-million`). "
         "At 100,000 the GPU's packing fills "
         f"{arm5['fill']:.5f} against 9d800f2's {base7b['fill']:.5f}. A fresh H100's first packing of a mesh: "
         f"{cold7:.1f} s ([output](../bench/results/compile_h100_issue48_step7b.txt)); peak memory at a million (whole "
         f"device): the armadillo {int(peak7['armadillo']):,} MiB, the cube {int(peak7['cube']):,} MiB "
         "([output](../bench/results/memory_h100_issue48_step7b.txt)). The steps before, and the sixth's figures: "
         "[benchmarks-history.md](benchmarks-history.md).",
-        *sources(*step7_files, "profile_kernels_h100_armadillo_issue48_step6.json",
-                 "work_model_2core_armadillo_100k_issue48_step6.json", "round_time_h100_cube_issue20_step7.json",
+        *sources(*step7_files, "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
                  "policy_fill_2core_10k.json",
                  "profile_kernels_h200_armadillo_issue48_step4.json",
