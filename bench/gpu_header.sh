@@ -59,3 +59,32 @@ for case in sys.argv[1:]:
           f"{np.sum(now['radii'] ** 3):.6g}")
 PY
 }
+
+# issue48_inputs: the armadillo at /tmp/armadillo.obj and the kernel cache that issue 48's GPU scripts share.
+issue48_inputs() {
+  [ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
+  export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
+}
+
+# need_base MODE: stop unless .gpu2/base holds the checkout to compare with (git archive BASE ndpack | tar x -C .gpu2/base).
+need_base() {
+  [ -d .gpu2/base/ndpack ] || { echo "$1: .gpu2/base/ndpack is missing" >&2; exit 2; }
+}
+
+# gather_in NAME: the results gather in /tmp/NAME (with gpu.txt), to be archived into $FINAL, the folder that
+# comes back (many files would not all come back).
+gather_in() {
+  FINAL=$OUT
+  OUT=/tmp/$1 && mkdir -p "$OUT" && cp "$FINAL/gpu.txt" "$OUT/"
+}
+
+# turns NAME PASSES: the armadillo at 100,000 with .gpu2/base's ndpack and this checkout's in turn, PASSES times
+# (5 runs each), to $OUT/NAME_passK_{base,now}.json: a difference smaller than one lease's drift.
+turns() {
+  local name=$1 pass version
+  for pass in $(seq 1 "$2"); do
+    for version in base now; do
+      kernels $version "${name}_pass${pass}" --backends warp --mesh /tmp/armadillo.obj --count 100000 --repeats 5
+    done
+  done
+}

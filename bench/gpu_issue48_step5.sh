@@ -19,9 +19,8 @@
 #        0.2 s, the CUDA context included) in one packing of the armadillo and of the unit cube at 1,000,000
 set -uo pipefail
 source bench/gpu_header.sh
-[ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
 STEP=${STEP:-step5}
-export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
+issue48_inputs
 case "${1:-}" in
   host)
     for count in 100000 1000000; do
@@ -33,9 +32,8 @@ case "${1:-}" in
       --out "$OUT/host_${CARD}_cube_1000000_issue48_${STEP}.txt" 2>&1 | grep -v "^Warp\|^Module"
     ;;
   measure)
-    [ -d .gpu2/base/ndpack ] || { echo "measure: .gpu2/base/ndpack is missing" >&2; exit 2; }
-    FINAL=$OUT
-    OUT=/tmp/measure && mkdir -p $OUT && cp "$FINAL/gpu.txt" $OUT/
+    need_base measure
+    gather_in measure
     for version in base now; do
       kernels $version "armadillo_100k_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj \
         --count 100000 --repeats 3 --spheres /tmp/armadillo_100k_$version.npz
@@ -55,8 +53,7 @@ case "${1:-}" in
     tar czf "$FINAL/measure_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
   final)
-    FINAL=$OUT
-    OUT=/tmp/final && mkdir -p $OUT && cp "$FINAL/gpu.txt" $OUT/
+    gather_in final
     cold_first_packing "$OUT/compile_${CARD}_issue48_${STEP}.txt"
     kernels now "armadillo_100k_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj --count 100000 \
       --repeats 3

@@ -20,14 +20,12 @@
 #        timed (and 3 unprofiled runs, stages timed): what bench/work_model.py --against sets its counts beside
 set -uo pipefail
 source bench/gpu_header.sh
-[ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
 STEP=${STEP:-step6}  # another name for a second run of the same step
-export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
+issue48_inputs
 case "${1:-}" in
   measure)
-    [ -d .gpu2/base/ndpack ] || { echo "measure: .gpu2/base/ndpack is missing" >&2; exit 2; }
-    FINAL=$OUT
-    OUT=/tmp/measure && mkdir -p $OUT && cp "$FINAL/gpu.txt" $OUT/
+    need_base measure
+    gather_in measure
     cold_first_packing "$OUT/compile_${CARD}_issue48_${STEP}.txt"
     kernels base "armadillo_100k_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj \
       --count 100000 --repeats 3 --spheres /tmp/armadillo_100k_base.npz
@@ -58,12 +56,7 @@ case "${1:-}" in
       --variants now split-3
     ;;
   turns)
-    for pass in 1 2; do
-      for version in base now; do
-        kernels $version "armadillo_100k_${CARD}_issue48_${STEP}_pass${pass}" --backends warp \
-          --mesh /tmp/armadillo.obj --count 100000 --repeats 5
-      done
-    done
+    turns "armadillo_100k_${CARD}_issue48_${STEP}" 2
     kernels now "armadillo_100k_${CARD}host_numba_issue48_${STEP}" --backends numba --mesh /tmp/armadillo.obj \
       --count 100000 --repeats 3
     kernels now "armadillo_100k_${CARD}_issue48_${STEP}_pass3" --backends warp --mesh /tmp/armadillo.obj \

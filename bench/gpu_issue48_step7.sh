@@ -25,20 +25,13 @@
 #        kernels with NVVM's optimisation and without (bench/compile_options.py), and the armadillo at 100,000 with each
 set -uo pipefail
 source bench/gpu_header.sh
-[ -f /tmp/armadillo.obj ] || xz -dc .gpu2/armadillo.obj.xz > /tmp/armadillo.obj
 STEP=${STEP:-step7}  # another name for a second run of the same step
-export NDPACK_CACHE=/tmp/ndpack-gpu-cache WARP_CACHE_PATH=/tmp/ndpack-gpu-cache/warp
+issue48_inputs
 case "${1:-}" in
   measure)
-    [ -d .gpu2/base/ndpack ] || { echo "measure: .gpu2/base/ndpack is missing" >&2; exit 2; }
-    FINAL=$OUT
-    OUT=/tmp/measure && mkdir -p $OUT && cp "$FINAL/gpu.txt" $OUT/
-    for pass in 1 2; do
-      for version in base now; do
-        kernels $version "armadillo_100k_${CARD}_issue48_${STEP}_pass${pass}" --backends warp \
-          --mesh /tmp/armadillo.obj --count 100000 --repeats 5
-      done
-    done
+    need_base measure
+    gather_in measure
+    turns "armadillo_100k_${CARD}_issue48_${STEP}" 2
     kernels now "armadillo_100k_${CARD}host_numba_issue48_${STEP}" --backends numba --mesh /tmp/armadillo.obj \
       --count 100000 --repeats 3
     kernels now "armadillo_100k_${CARD}_issue48_${STEP}_reach" --backends warp --mesh /tmp/armadillo.obj \
@@ -56,7 +49,7 @@ case "${1:-}" in
     tar czf "$FINAL/measure_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
   final)
-    [ -d .gpu2/base/ndpack ] || { echo "final: .gpu2/base/ndpack is missing" >&2; exit 2; }
+    need_base final
     cold_first_packing "$OUT/compile_${CARD}_issue48_${STEP}.txt"
     for version in base now; do
       kernels $version "armadillo_100k_${CARD}_issue48_${STEP}" --backends warp --mesh /tmp/armadillo.obj \

@@ -52,11 +52,12 @@ MODULES: dict[str, int] = {}
 #: pack armadillo.obj -n 3 --backend numba``), 7.4 s for the mesh queries on an H200's host; Warp
 #: on an H200 3.3 s for the 3-D meshes' kernels and 2.5 s for their cooperative moves (at
 #: ``WARP_OPTIMIZATION``, the driver's compile of the PTX included;
-#: bench/results/compile_times_h200_issue48_step4.json). On an H100's host Numba took 6.0-8.5 s for
+#: bench/results/compile_times_h200_issue48_step4.json). On H100s' hosts Numba took 6.0-13.5 s for
 #: the mesh queries, 8.1 s for the 2-D shapes, 8.3 s for the 3-D shapes and 16.0 s for 3-D shapes and
 #: meshes, and numba-cuda 41.6 s for the armadillo's kernels (its first packing, 50.1 s, less the
-#: mesh queries' 8.5 s; bench/results/compile_h100_issue48_step7c.txt). So the estimates are within
-#: 2x of each.
+#: mesh queries' 8.5 s; bench/results/compile_h100_issue48_step7c.txt), 58 s without NVVM's
+#: optimisation and 77 s with it on a slower lease (compile_options_h100_numba_cuda_issue48.json).
+#: So the estimates are within 2x of each.
 TYPICAL_SECONDS = {"numba": 10, "numba-cuda": 40, "warp": 6, "warp on a GPU": 4}
 #: Warp's CUDA optimisation level for ndpack's modules. At Warp's default (3) a fresh H100's first
 #: packing of a mesh compiled for 90 s (most of it the driver compiling Warp's PTX) and packed the
