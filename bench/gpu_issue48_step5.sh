@@ -17,6 +17,7 @@
 #        timed (and 3 unprofiled runs, stages timed): what bench/work_model.py --against sets its counts beside
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step5.sh memory   the GPU's peak memory (nvidia-smi, every
 #        0.2 s, the CUDA context included) in one packing of the armadillo and of the unit cube at 1,000,000
+#        (BACKEND=numba-cuda: on that backend; Warp by default)
 set -uo pipefail
 source bench/gpu_header.sh
 STEP=${STEP:-step5}
@@ -78,13 +79,13 @@ case "${1:-}" in
     for case in armadillo cube; do
       shape="nd.TriangleMesh.load('/tmp/armadillo.obj')"
       [ $case = cube ] && shape="nd.Box(np.zeros(3), np.ones(3))"
-      python3 -c "import ndpack as nd, numpy as np; nd.pack($shape, 3, backend='warp', mode='fast')" 2>&1 | tail -1
+      python3 -c "import ndpack as nd, numpy as np; nd.pack($shape, 3, backend='${BACKEND:-warp}', mode='fast')" 2>&1 | tail -1
       nvidia-smi --query-gpu=memory.used --format=csv,noheader,nounits -lms 200 > /tmp/memory_$case.txt &
       sampler=$!
       python3 -c "
 import time, ndpack as nd, numpy as np
 started = time.perf_counter()
-packing = nd.pack($shape, 1_000_000, backend='warp', mode='fast', progress=False)
+packing = nd.pack($shape, 1_000_000, backend='${BACKEND:-warp}', mode='fast', progress=False)
 print('$case', len(packing.radii), 'spheres', f'{time.perf_counter() - started:.2f} s', f'fill {packing.fill:.5f}')
 " 2>&1 | grep -v "^Warp\|^Module"
       kill $sampler

@@ -30,7 +30,7 @@ def clearance_all(points, prm, centers, radii, nbr, h, out, out_direction):
 def converge_all(points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, out_points,
                  out_clearance):
     for i in prange(points.shape[0]):
-        converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, out_points,
+        converge_one(i, 0, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, out_points,
                      out_clearance)
 
 

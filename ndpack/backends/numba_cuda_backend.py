@@ -24,6 +24,7 @@ from ..kernels.tape import interpreter
 from .base import Backend, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
 from .numba_common import FD_STEP, KERNELS
+from .numba_cuda_lanes import CONVERGE_MOST, COOPERATIVE_MOST, LANES, has_walk, lanes_text, shared_bytes
 from .prototypes import SPREAD_MAX, DevicePrototypes, no_wall
 
 ENTRIES = '''
@@ -35,10 +36,11 @@ def clearance_all(points, prm, centers, radii, nbr, h, out, out_direction):
 
 def converge_all(points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, out_points,
                  out_clearance):
-    i = cuda.grid(1)
+    # A block of LANES threads is one point's, which walk together (ndpack.backends.numba_cuda_lanes).
+    i = cuda.blockIdx.x if cuda.blockDim.x == LANES else cuda.grid(1)
     if i < points.shape[0]:
-        converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, out_points,
-                     out_clearance)
+        converge_one_lanes(i, cuda.threadIdx.x if cuda.blockDim.x == LANES else 0, points, starts, tries, lower,
+                           upper, wall, prm, centers, radii, nbr, steps, h, out_points, out_clearance)
 
 
 def near_count(lower, upper, reach, centers, radii, counts, out):
@@ -287,11 +289,20 @@ def lower_floats(ids, values, out):
 
 def move_ids(ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper, wall, prm, centers,
              radii, nbr, steps, h, polish, spread, polish_steps, polish_low, polish_from):
-    t = cuda.grid(1)
-    b = t // spread
-    if t % spread == 0 and b < ids.shape[0]:
-        move_one(b, ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper, wall, prm,
-                 centers, radii, nbr, steps, h, polish, polish_steps, polish_low, polish_from)
+    # A block of LANES threads is one prototype's, which walk together (ndpack.backends.numba_cuda_lanes);
+    # in other launches thread b * spread moves prototype b and the spread - 1 after it idle.
+    lane = 0
+    if cuda.blockDim.x == LANES:
+        b = cuda.blockIdx.x
+        lane = cuda.threadIdx.x
+    else:
+        t = cuda.grid(1)
+        b = t // spread
+        if t % spread != 0:
+            return
+    if b < ids.shape[0]:
+        move_one_lanes(b, lane, ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper,
+                       wall, prm, centers, radii, nbr, steps, h, polish, polish_steps, polish_low, polish_from)
 '''
 ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
                "select_all", "max_all", "window_count", "window_below", "select_window", "touched_index_select",
@@ -304,6 +315,14 @@ THREADS_PER_BLOCK = 128
 #: 1.50 s (medians of 3, the same packing; ``bash bench/gpu_issue48_step7.sh cuda-compile``): the time
 #: goes to Numba's typing and lowering of the inlined mesh walk more than to NVVM.
 CUDA_OPT = False
+
+
+def kernels_text(program, simulator: bool = False) -> str:
+    """The backend's functions and entry points for ``program`` in the numba dialect, with the
+    cooperative chain (:func:`~ndpack.backends.numba_cuda_lanes.lanes_text`; its lane primitives
+    through shared memory for Numba's CUDA ``simulator``)."""
+    cooperative = lanes_text(program.source("cuda") + "\n\n" + KERNELS, simulator=simulator)
+    return KERNELS + cooperative + ENTRIES + STORE_ENTRIES
 
 
 class NumbaCudaBackend(Backend):
@@ -342,8 +361,14 @@ class NumbaCudaBackend(Backend):
         self.launch_bound = not numba.config.ENABLE_CUDASIM  # the simulator runs a launch item by item
         # Threads per prototype in a move launch, at most (prototypes.lane_spread); idle ones cost a CPU.
         self.move_spread = SPREAD_MAX if self.launch_bound else 1
+        # A move launch of more than one thread per prototype and at most cooperative_most prototypes,
+        # and a converge of at most cooperative_converge_most points, walk a mesh's tree with a block
+        # of LANES threads per item (0: never; see numba_cuda_lanes).
+        self.cooperative_most = COOPERATIVE_MOST if self.launch_bound else 0
+        self.cooperative_converge_most = CONVERGE_MOST if self.launch_bound else 0
+        self._simulator = bool(numba.config.ENABLE_CUDASIM)
         cuda.select_device(self.device)
-        self._namespaces = {}  # id(program) -> (program, namespace)
+        self._namespaces = {}  # id(program) -> (program, namespace, whether it walks a tree)
         self._params = weakref.WeakKeyDictionary()  # shape -> its numbers on the device
         self._spheres = DeviceSpheres(
             empty=lambda capacity, dim: (cuda.device_array((capacity, dim)), cuda.device_array(capacity)),
@@ -370,9 +395,15 @@ class NumbaCudaBackend(Backend):
 
     def _program_kernels(self, program):
         if id(program) not in self._namespaces:
-            namespace = numba_namespace(program, "cuda", KERNELS + ENTRIES + STORE_ENTRIES, self._jit)
-            self._namespaces[id(program)] = (program, namespace)
+            namespace = numba_namespace(program, "cuda", kernels_text(program, self._simulator), self._jit)
+            self._namespaces[id(program)] = (program, namespace, has_walk(program.source("cuda")))
         return self._namespaces[id(program)][1]
+
+    def _walks(self, shape) -> bool:
+        """Whether ``shape``'s kernels walk a tree (and so have a cooperative walk)."""
+        program = compiled_program(shape).program
+        self._program_kernels(program)
+        return self._namespaces[id(program)][2]
 
     def _geometry(self, dim):
         """The shape-free kernels (near_spheres, touched) for dimension ``dim``: those of the
@@ -413,9 +444,12 @@ class NumbaCudaBackend(Backend):
         wall = no_wall(len(points)) if wall is None else wall
         tries = 0 if starts is None else len(starts)
         starts = _f64(starts) if tries else np.zeros((1, len(points), shape.dim))
-        self._launch(namespace["converge_all"], len(points), to(_f64(points)), to(starts), tries, to(_f64(cell_lower)),
-                     to(_f64(cell_upper)), to(_f64(wall)), params, d_centers, d_radii, table, to(_f64(steps)),
-                     h, out_points, out_clearance)
+        args = (to(_f64(points)), to(starts), tries, to(_f64(cell_lower)), to(_f64(cell_upper)), to(_f64(wall)), params,
+                d_centers, d_radii, table, to(_f64(steps)), h, out_points, out_clearance)
+        if 0 < len(points) <= self.cooperative_converge_most and self._walks(shape):
+            namespace["converge_all"][len(points), LANES, 0, shared_bytes()](*args)  # a block of lanes per point
+        else:
+            self._launch(namespace["converge_all"], len(points), *args)
         return out_points.copy_to_host(), out_clearance.copy_to_host()
 
     def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
@@ -469,6 +503,7 @@ class _CudaDevice:
     def __init__(self, backend, shape):
         self.backend, self.cuda = backend, backend.cuda
         self.namespace, self.params, self.h = backend._kernels(shape)
+        self.walks = backend._walks(shape)
         self.stream = self.cuda.stream()
         self._staging = {}  # (slot, dtype, row shape) -> pinned host array that fetch copies into
         import numba
@@ -525,7 +560,14 @@ class _CudaDevice:
         self.stream.synchronize()
 
     def launch(self, name, threads, *args, lanes=1):
-        """``lanes``: threads per item; numba-cuda has no cooperative kernels, so they idle."""
+        """``threads`` threads of kernel ``name``, ``lanes`` of them per item. A move of more than one
+        lane per item and at most the backend's ``cooperative_most`` items, where the shape walks a
+        tree, runs a block of ``LANES`` threads per item, which walk together (numba_cuda_lanes);
+        otherwise the first lane of each item works and the rest idle."""
+        items = threads // lanes
+        if name == "move_ids" and lanes > 1 and 0 < items <= self.backend.cooperative_most and self.walks:
+            self.namespace[name][items, LANES, self.stream, shared_bytes()](*args)
+            return
         self.backend._launch(self.namespace[name], threads, *args, stream=self.stream)
 
     def spheres(self, centers, radii):

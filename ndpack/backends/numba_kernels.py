@@ -120,19 +120,22 @@ def clearance_one(i, points, prm, centers, radii, nbr, h, out, out_direction):
             out_direction[i, k] = g[k]
 
 
-def converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, out_points,
+def converge_one(i, lane, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, out_points,
                  out_clearance):
     """Converge point ``i`` in its cell (row ``i`` of every table), from the best of it and
-    ``starts[:tries, i]``, into the outputs."""
+    ``starts[:tries, i]``, into the outputs. Lane 0 writes: the lanes of a cooperative launch
+    (ndpack.backends.numba_cuda_lanes) all compute the same point."""
     x = point()
     g = point()
     best = point()
     for k in range(D):
         x[k] = points[i, k]
     best_start(x, g, starts, tries, i, i, lower, upper, wall, prm, centers, radii, nbr)
-    out_clearance[i] = converge_from(x, g, best, i, i, lower, upper, wall, prm, centers, radii, nbr, steps, h)
-    for k in range(D):
-        out_points[i, k] = best[k]
+    c = converge_from(x, g, best, i, i, lower, upper, wall, prm, centers, radii, nbr, steps, h)
+    if lane == 0:
+        out_clearance[i] = c
+        for k in range(D):
+            out_points[i, k] = best[k]
 
 
 def best_start(x, g, starts, tries, cell, row, lower, upper, wall, prm, centers, radii, nbr):
@@ -212,14 +215,15 @@ def restart_unit(key, counter):
     return float(word) * 2.3283064365386963e-10  # 2**-32: exact in float64
 
 
-def move_one(b, ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper, wall, prm, centers,
-             radii, nbr, steps, h, polish, polish_steps, polish_low, polish_from):
+def move_one(b, lane, ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper, wall, prm,
+             centers, radii, nbr, steps, h, polish, polish_steps, polish_low, polish_from):
     """Move prototype ``ids[b]`` in place: from the best of its point, ``first[b]`` (clipped to
     its cell, where ``b < first_rows``) and ``tries`` random points of its cell drawn from
     ``stream``, converge; keep the result (``polish`` 0), or keep it only if better and mark it
     polished (1). Then, where it was not a polish and the clearance reaches ``polish_low``,
     polish it with ``polish_steps``; rows from ``polish_from`` on are only polished (the host
-    store's ``move(..., ahead=PolishAhead(...))``)."""
+    store's ``move(..., ahead=PolishAhead(...))``). Lane 0 writes: the lanes of a cooperative
+    launch (ndpack.backends.numba_cuda_lanes) all compute the same move."""
     i = ids[b]
     x = point()
     g = point()
@@ -227,7 +231,7 @@ def move_one(b, ids, first, first_rows, tries, stream, points, clearance, polish
     for k in range(D):
         x[k] = points[i, k]
     if b >= polish_from:
-        polish_one(i, b, x, g, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
+        polish_one(i, b, lane, x, g, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
                    polish_steps, h)
         return
     lead = 1 if b < first_rows else 0
@@ -250,28 +254,31 @@ def move_one(b, ids, first, first_rows, tries, stream, points, clearance, polish
                 for k in range(D):
                     x[k] = g[k]
     c = converge_from(x, g, best, i, b, lower, upper, wall, prm, centers, radii, nbr, steps, h)
-    if polish == 0 or c > clearance[i]:
-        clearance[i] = c
-        for k in range(D):
-            points[i, k] = best[k]
-    polished[i] = polish
+    if lane == 0:
+        if polish == 0 or c > clearance[i]:
+            clearance[i] = c
+            for k in range(D):
+                points[i, k] = best[k]
+        polished[i] = polish
     if polish == 0 and c >= polish_low:
         for k in range(D):
             x[k] = best[k]
-        polish_one(i, b, x, g, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
+        polish_one(i, b, lane, x, g, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
                    polish_steps, h)
 
 
-def polish_one(i, b, x, g, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr, steps, h):
+def polish_one(i, b, lane, x, g, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
+               steps, h):
     """Polish prototype ``i`` (row ``b`` of the table) from ``x``, its point: move it with
-    ``steps`` and keep the result only if its clearance grew; mark it polished. ``g`` and
-    ``best`` are scratch."""
+    ``steps`` and keep the result only if its clearance grew; mark it polished (lane 0). ``g``
+    and ``best`` are scratch."""
     c = converge_from(x, g, best, i, b, lower, upper, wall, prm, centers, radii, nbr, steps, h)
-    if c > clearance[i]:
-        clearance[i] = c
-        for k in range(D):
-            points[i, k] = best[k]
-    polished[i] = 1
+    if lane == 0:
+        if c > clearance[i]:
+            clearance[i] = c
+            for k in range(D):
+                points[i, k] = best[k]
+        polished[i] = 1
 
 
 def near_one(b, lower, upper, reach, centers, radii, out, width):

@@ -20,9 +20,9 @@ lane walk alone, as the serial kernel does.
 
 The functions between the move kernel and the walk are the serial ones, copied with a ``_lanes``
 suffix by :func:`lanes_text` (the only change: they call the ``_lanes`` versions), so there is
-one description of a move. Warp only: the tiles it needs (``wp.tile_stack``) have no numba-cuda
-counterpart. A program without a tree walk (no mesh or outline, or float32, where Warp's own
-``wp.Mesh`` answers) gets no cooperative kernel.
+one description of a move. numba-cuda has its own walk, of the same design
+(:mod:`ndpack.backends.numba_cuda_lanes`). A program without a tree walk (no mesh or outline, or
+float32, where Warp's own ``wp.Mesh`` answers) gets no cooperative kernel.
 """
 
 from __future__ import annotations
@@ -172,19 +172,24 @@ def has_walk(text: str) -> bool:
     return "def nearest_element(" in text and "wp.mesh_query_point" not in text
 
 
-def _definition(text: str, name: str) -> str:
-    """The text of the top-level ``@wp.func`` ``name`` in ``text``."""
-    found = re.search(rf"^@wp\.func\ndef {name}\(.*?(?=^\S)", text + "\n#", flags=re.M | re.S)
+def definition(text: str, name: str, decorator: str = "@wp.func\n") -> str:
+    """The text of the top-level function ``name`` in ``text``, with its ``decorator`` line."""
+    found = re.search(rf"^{re.escape(decorator)}def {name}\(.*?(?=^\S)", text + "\n#", flags=re.M | re.S)
     if found is None:
-        raise ValueError(f"no function {name} in the module's text: warp_lanes.CHAIN is out of date")
+        raise ValueError(f"no function {name} in the module's text: the cooperative chain is out of date")
     return found.group(0)
+
+
+def chain_copies(text: str, chain, decorator: str = "@wp.func\n") -> list[str]:
+    """The functions ``chain`` of ``text`` copied with :data:`SUFFIX`, each calling the copies (and
+    ``nearest_element_lanes``) in place of the originals: the way from a move to the tree walk."""
+    calls = re.compile(r"\b(" + "|".join((*chain, "nearest_element")) + r")\(")
+    return [calls.sub(lambda m: m.group(1) + SUFFIX + "(", definition(text, name, decorator)) for name in chain]
 
 
 def lanes_text(text: str, capacity: int = STACK_CAPACITY, share: int = SHARE_EVERY) -> str:
     """The cooperative move of a module whose ``text`` (program and kernels) walks a tree
     (:func:`has_walk`): the :data:`CHAIN` copied with the suffix, the walk (:func:`nearest_lanes`),
     :data:`MOVE_KERNEL` and :data:`CONVERGE_KERNEL`."""
-    calls = re.compile(r"\b(" + "|".join((*CHAIN, "nearest_element")) + r")\(")
-    copies = [calls.sub(lambda m: m.group(1) + SUFFIX + "(", _definition(text, name)) for name in CHAIN]
     return "\n\n".join(["# Cooperative moves: see ndpack.backends.warp_lanes.", nearest_lanes(capacity, share),
-                        *copies, MOVE_KERNEL, CONVERGE_KERNEL])
+                        *chain_copies(text, CHAIN), MOVE_KERNEL, CONVERGE_KERNEL])

@@ -1,0 +1,252 @@
+"""numba-cuda's compile of a packing's kernels, measured without a GPU (issue 48).
+
+    python3 bench/cuda_compile.py --out bench/results/cuda_compile_2core.json
+    python3 bench/cuda_compile.py --shape square --count 40
+
+A fresh GPU machine's first mesh packing with numba-cuda spends most of its time compiling
+kernels (41.6-77 s on H100s' hosts), and GPU time is scarce. Compiling is CPU work: Numba types
+and lowers each kernel with the device functions it calls, and NVVM turns the LLVM into PTX.
+Both run without a GPU (``numba.cuda.compile_ptx``, given NVVM and NVRTC: ``CUDA_HOME`` and
+``LD_LIBRARY_PATH``), so this script measures them here, kernel by kernel:
+
+1. a child process packs a small shape with numba-cuda under the CUDA simulator and records each
+   kernel it launches with the types of its arguments (the kernels a first packing compiles);
+2. a second child, without the simulator, builds the same generated module and compiles each
+   recorded kernel to PTX for ``--cc`` (9.0: the H100), timing each, with NVVM's optimisation as
+   ``numba_cuda_backend.CUDA_OPT`` asks.
+
+The time of a kernel includes the device functions compiled for it first (a device function is
+typed and lowered once, for the first kernel that calls it); the order is the packing's. On a
+2-core machine the times are about 1.5-2x an H100 host's; the split between kernels is what
+counts. ``--ptxas PATH`` times the compile of each kernel's PTX to SASS as well, which the driver
+does when it loads the kernel on a GPU.
+
+On a GPU machine, ``--on-gpu --mesh FILE`` times what a fresh machine does instead: a first packing
+(3 spheres, numba-cuda, fast mode) with ndpack's and the driver's caches empty, each kernel's first
+launch timed (Numba's compile, the driver's link and load), and the signatures each kernel was
+compiled for (a kernel launched with other argument types compiles again).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import pickle
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from _common import machine_info, write_json
+
+
+def shape_of(name: str):
+    import trimesh
+
+    import ndpack as nd
+
+    if name == "mesh":  # any 3-D mesh: they share one generated module
+        sphere = trimesh.creation.icosphere(subdivisions=2)
+        return nd.TriangleMesh(sphere.vertices, sphere.faces)
+    if name == "square":
+        return nd.Box([0.0, 0.0], [1.0, 1.0])
+    if name == "cube":
+        return nd.Box([0.0, 0.0, 0.0], [1.0, 1.0, 1.0])
+    raise SystemExit(f"unknown shape {name!r}: mesh, square or cube")
+
+
+def record(args) -> None:
+    """Child 1 (simulator): the kernels a small packing launches, with their argument types."""
+    import numba
+    import numpy as np
+
+    import ndpack as nd
+    from ndpack.backends import numba_cuda_backend
+
+    launched = {}
+
+    def typed(value):
+        if hasattr(value, "_ary"):  # the simulator's device array
+            value = value._ary
+        if isinstance(value, np.ndarray):
+            value = np.ascontiguousarray(value)
+        return numba.typeof(value)
+
+    original = numba_cuda_backend.NumbaCudaBackend._launch
+
+    def recording(self, kernel, count, *launch_args, stream=0):
+        name = getattr(kernel, "py_func", None) or getattr(kernel, "fn", None)
+        name = getattr(name, "__name__", str(kernel))
+        module = getattr(getattr(kernel, "fn", None), "__module__", "")
+        launched.setdefault((module, name, tuple(typed(a) for a in launch_args)), len(launched))
+        return original(self, kernel, count, *launch_args, stream=stream)
+
+    numba_cuda_backend.NumbaCudaBackend._launch = recording
+    from ndpack.backends import get_backend
+
+    backend = get_backend("numba-cuda")
+    backend.launch_bound = True  # a GPU's policies, so the kernels a GPU's packing launches
+    shape = shape_of(args.shape)
+    nd.pack(shape, n=args.count, grid=args.grid, mode="fast", backend=backend, seed=0, progress=False)
+    with open(args.record, "wb") as out:
+        pickle.dump({"shape": args.shape, "kernels": sorted(launched, key=launched.get)}, out)
+
+
+def compile_all(args) -> None:
+    """Child 2 (no simulator): each recorded kernel compiled to PTX, timed."""
+    from types import SimpleNamespace
+
+    from numba import cuda
+    from numba.cuda import dispatcher
+
+    from ndpack.backends import numba_cuda_backend
+
+    # A device function asks the current device for its compute capability: there is none here.
+    dispatcher.get_current_device = lambda: SimpleNamespace(compute_capability=tuple(args.cc))
+    from ndpack.backends.numba_cuda_backend import ENTRY_NAMES, kernels_text
+    from ndpack.kernels.compile import numba_namespace
+    from ndpack.kernels.compiled import compiled_program
+    from ndpack.kernels.tape import interpreter
+
+    with open(args.record, "rb") as source:
+        recorded = pickle.load(source)
+    shape = shape_of(recorded["shape"])
+    programs = {}
+
+    def namespace_of(module):
+        key = "geometry" if module.endswith("interpreter") else "shape"
+        if key not in programs:
+            program = compiled_program(shape).program
+            if key == "geometry":
+                program = interpreter(shape.dim)
+
+            def jit(namespace, names):
+                for name in names:
+                    if name not in ENTRY_NAMES:
+                        namespace[name] = cuda.jit(device=True)(namespace[name])
+
+            programs[key] = numba_namespace(program, "cuda", kernels_text(program), jit)
+        return programs[key]
+
+    rows = []
+    for module, name, types in recorded["kernels"]:
+        namespace = namespace_of(module)
+        started = time.perf_counter()
+        ptx, _ = cuda.compile_ptx(namespace[name], types, opt=numba_cuda_backend.CUDA_OPT, cc=tuple(args.cc))
+        seconds = time.perf_counter() - started
+        row = {"kernel": name, "seconds": round(seconds, 2), "ptx_lines": ptx.count("\n")}
+        if args.ptxas:
+            row["ptxas_seconds"] = round(ptxas_seconds(args.ptxas, ptx, args.cc), 2)
+        rows.append(row)
+        print(f"{name:24s} {seconds:7.2f} s  {row['ptx_lines']:8d} PTX lines  ptxas {row.get('ptxas_seconds', '-')} s",
+              flush=True)
+    print(json.dumps({"rows": rows}))
+
+
+def on_gpu(args) -> None:
+    """A fresh machine's first numba-cuda packing of ``args.mesh``, kernel by kernel (run in a child
+    with empty caches)."""
+    import ndpack as nd
+    from ndpack.kernels import compile as kernel_compile
+
+    firsts = []
+    original = kernel_compile.CudaKernel.__getitem__
+
+    def timed(self, config):
+        launch = original(self, config)
+        name = self.kernel.py_func.__name__
+        if any(row["kernel"] == name and row["config"] == str(config) for row in firsts):
+            return launch
+
+        def first(*launch_args):
+            started = time.perf_counter()
+            result = launch(*launch_args)
+            firsts.append({"kernel": name, "config": str(config), "seconds": round(time.perf_counter() - started, 2)})
+            print(f"{name:24s} {firsts[-1]['seconds']:7.2f} s  (first launch, {config})", flush=True)
+            return result
+
+        return first
+
+    kernel_compile.CudaKernel.__getitem__ = timed
+    shape = nd.TriangleMesh.load(args.mesh)
+    started = time.perf_counter()
+    nd.pack(shape, 3, backend="numba-cuda", mode="fast", progress=False)
+    first_packing = time.perf_counter() - started
+    from ndpack.backends import get_backend
+
+    backend = get_backend("numba-cuda")
+    signatures = {}
+    for entry in backend._namespaces.values():  # (program, namespace, ...)
+        namespace = entry[1]
+        for name, value in namespace.items():
+            if isinstance(value, kernel_compile.CudaKernel):
+                signatures[name] = len(value.kernel.overloads)
+    print(json.dumps({"first_packing_s": round(first_packing, 2), "first_launches": firsts,
+                      "signatures": {k: v for k, v in signatures.items() if v}}))
+
+
+def ptxas_seconds(ptxas: str, ptx: str, cc) -> float:
+    """Seconds of ``ptxas`` (at its default -O3, as the driver's JIT) turning ``ptx`` into SASS."""
+    with tempfile.TemporaryDirectory() as folder:
+        source = Path(folder, "kernel.ptx")
+        source.write_text(ptx)
+        started = time.perf_counter()
+        subprocess.run([ptxas, f"-arch=sm_{cc[0]}{cc[1]}", str(source), "-o", str(Path(folder, "kernel.cubin"))],
+                       check=True)
+        return time.perf_counter() - started
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--shape", default="mesh", help="mesh (any 3-D mesh), cube or square")
+    parser.add_argument("--count", type=int, default=12, help="spheres of the recording packing")
+    parser.add_argument("--grid", type=int, default=4, help="its grid (the simulator runs a thread at a time)")
+    parser.add_argument("--cc", type=int, nargs=2, default=[9, 0], help="compute capability compiled for")
+    parser.add_argument("--ptxas", help="ptxas to time the PTX's compile to SASS with (the driver does it at load)")
+    parser.add_argument("--on-gpu", action="store_true", help="time a fresh GPU machine's first packing instead")
+    parser.add_argument("--mesh", help="the mesh of --on-gpu")
+    parser.add_argument("--out", type=Path)
+    parser.add_argument("--child", choices=["record", "compile", "on-gpu"], help=argparse.SUPPRESS)
+    parser.add_argument("--record", help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.child == "record":
+        return record(args)
+    if args.child == "compile":
+        return compile_all(args)
+    if args.child == "on-gpu":
+        return on_gpu(args)
+    if args.on_gpu:
+        with tempfile.TemporaryDirectory() as folder:
+            env = dict(os.environ, NDPACK_CACHE=folder, CUDA_CACHE_DISABLE="1")
+            done = subprocess.run([sys.executable, __file__, "--child", "on-gpu", "--mesh", args.mesh], env=env,
+                                  check=True, stdout=subprocess.PIPE, text=True)
+        print(done.stdout, end="")
+        result = json.loads(done.stdout.strip().splitlines()[-1])
+        if args.out:
+            write_json(args.out, {"machine": machine_info(), "command": " ".join(["python3 bench/cuda_compile.py",
+                                                                                 *(argv or sys.argv[1:])]), **result})
+        return None
+    with tempfile.TemporaryDirectory() as folder:
+        recording = os.path.join(folder, "kernels.pickle")
+        common = [sys.executable, __file__, "--shape", args.shape, "--count", str(args.count), "--grid", str(args.grid),
+                  "--record", recording, "--cc", *map(str, args.cc),
+                  *(["--ptxas", args.ptxas] if args.ptxas else [])]
+        env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1", NDPACK_CACHE=folder)
+        subprocess.run([*common, "--child", "record"], env=env, check=True)
+        env = dict(os.environ, NDPACK_CACHE=folder)
+        env.pop("NUMBA_ENABLE_CUDASIM", None)
+        done = subprocess.run([*common, "--child", "compile"], env=env, check=True, stdout=subprocess.PIPE, text=True)
+        print(done.stdout, end="")
+    rows = json.loads(done.stdout.strip().splitlines()[-1])["rows"]
+    total = sum(row["seconds"] for row in rows)
+    print(f"{'all':24s} {total:7.2f} s")
+    if args.out:
+        write_json(args.out, {"machine": machine_info(), "command": " ".join(["python3 bench/cuda_compile.py",
+                                                                             *(argv or sys.argv[1:])]),
+                              "shape": args.shape, "cc": args.cc, "rows": rows, "seconds": round(total, 2)})
+
+
+if __name__ == "__main__":
+    main()
