@@ -150,6 +150,21 @@ SOURCES = {
        for case in ("armadillo", "cube", "square")},
     "compile_options_h100_numba_cuda_issue48.json": Source(
         "H100", "e785e8a", "bash bench/gpu_issue48_step7.sh cuda-compile", "2026-11-27"),
+    # Issue 48's eighth step (numba-cuda's cooperative walk): bench/gpu_issue48_step8.sh on one H100 lease, NumPy 2.4
+    # carried, this code (640ce8f) against cf9e21a.
+    "armadillo_100k_h100_numba_cuda_issue48_step8_base.json": Source(
+        "H100", "cf9e21a", "bash bench/gpu_issue48_step8.sh cuda", "2026-11-27"),
+    "cuda_compile_h100_issue48_step8_base.json": Source(
+        "H100", "cf9e21a", "bash bench/gpu_issue48_step8.sh compile", "2026-11-27"),
+    **{name: Source("H100", "640ce8f", f"bash bench/gpu_issue48_step8.sh {mode}", "2026-11-27") for name, mode in [
+        ("armadillo_100k_h100_numba_cuda_issue48_step8_now.json", "cuda"),
+        ("armadillo_100k_h100_backends_issue48_step8_now.json", "cuda"),
+        ("cuda_compile_h100_issue48_step8_now.json", "compile"),
+        *[(f"{case}_1m_h100_backends_issue48_step8_now.json", "million") for case in ("armadillo", "cube", "square")],
+        ("armadillo_100k_h100_backends_issue48_step8b_now.json", "backends")]},
+    "cuda_compile_2core_issue48_step8.json": Source(
+        "2 cores", "640ce8f", "python bench/cuda_compile.py --shape mesh --grid 6 --count 40 --ptxas "
+        "/usr/local/cuda-13.0/bin/ptxas --out bench/results/cuda_compile_2core_issue48_step8.json"),
     "ahead_fraction_2core.json": Source(
         "2 cores", "1e767cb", "python bench/ahead_tail.py --starts 3e-4 --fractions 0.64 0.512 0.4 --large-seeds 3"),
     "work_model_2core_armadillo_100k_issue48_step7.json": Source(
@@ -421,56 +436,51 @@ def scale_h100() -> list[str]:
     model4 = load("work_model_2core_armadillo_100k_issue48_step4.json")
     cold = {card: float(re.search(r"cache empty: ([0-9.]+) s", (RESULTS / f"compile_{card}_issue48_step4.txt")
                                   .read_text())[1]) for card in ("h100", "h200")}
-    # Issue 48's seventh step: its first lease (measure: turns, the reach in one process, the millions against
-    # 9d800f2) and a second (final: the table's figures).
+    # Issue 48's seventh step, its second lease (STEP=step7b final): the million rows' Warp and numba.
     final = {name: load(f"{name}_issue48_step7b_now.json") for name in (
-        "armadillo_100k_h100", "armadillo_100k_h100host_numba", "armadillo_1m_h100", "cube_1m_h100",
-        "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")}
-    backends7 = load("armadillo_100k_h100_backends_issue48_step7c_now.json")  # a third lease, NumPy 2.4 carried
-    arm5, arm5_cuda, arm5_cpu = backends7["warp"], backends7["numba-cuda"], backends7["numba"]
-    arm7b, arm7b_cpu = final["armadillo_100k_h100"]["warp"], final["armadillo_100k_h100host_numba"]["numba"]
-    cuda_opt, cuda_noopt = (first(load("compile_options_h100_numba_cuda_issue48.json")["rows"], variant=variant)
-                            for variant in ("ndpack", "cuda-noopt"))
-    million_cuda = {case: load(f"{case}_1m_h100_backends_issue48_step7c_now.json")
+        "armadillo_1m_h100", "cube_1m_h100", "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")}
+    # Issue 48's eighth step (numba-cuda's cooperative walk), one H100 lease with NumPy 2.4 carried.
+    backends8 = load("armadillo_100k_h100_backends_issue48_step8b_now.json")  # the three backends in one process
+    arm5, arm5_cuda, arm5_cpu = backends8["warp"], backends8["numba-cuda"], backends8["numba"]
+    lanes8 = load("armadillo_100k_h100_numba_cuda_issue48_step8_now.json")
+    base8 = load("armadillo_100k_h100_numba_cuda_issue48_step8_base.json")["numba-cuda"]
+    beside8 = load("armadillo_100k_h100_backends_issue48_step8_now.json")
+    million_cuda = {case: load(f"{case}_1m_h100_backends_issue48_step8_now.json")
                     for case in ("armadillo", "cube", "square")}
-    cold_cuda = float(re.search(r"numba-cuda: first packing of a mesh, cache empty: ([0-9.]+) s",
-                                (RESULTS / "compile_h100_issue48_step7c.txt").read_text())[1])
+    compile8 = {version: load(f"cuda_compile_h100_issue48_step8_{version}.json") for version in ("now", "base")}
+    launches8 = {version: {row["kernel"]: row["seconds"] for row in compile8[version]["first_launches"]
+                           if row["seconds"] > 0} for version in compile8}
+    model8 = {row["kernel"]: row for row in load("cuda_compile_2core_issue48_step8.json")["rows"]}
+    peak8 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
+                            (RESULTS / "memory_h100_issue48_step8.txt").read_text()))
     arm5_1m = final["armadillo_1m_h100"]["warp"]
     cube_1m, cube_1m_cpu = final["cube_1m_h100"]["warp"], final["cube_1m_h100host_numba"]["numba"]
     square_1m, square_1m_cpu = final["square_1m_h100"]["warp"], final["square_1m_h100host_numba"]["numba"]
-    base7b = load("armadillo_100k_h100_issue48_step7b_base.json")["warp"]
-    turns = {name: load(f"armadillo_100k_h100_issue48_step7_{name}.json")["warp"] for name in (
-        "pass1_base", "pass1_now", "pass2_base", "pass2_now")}
-    reach = load("armadillo_100k_h100_issue48_step7_reach_now.json")
-    numba7 = load("armadillo_100k_h100host_numba_issue48_step7_now.json")["numba"]
-    million = {(case, version): load(f"{case}_h100_issue48_step7_{version}.json")["warp"]
-               for case in ("armadillo_1m", "cube_1m") for version in ("base", "now")}
-    fraction = {(row["shape"], row["fraction"]): row for row in load("ahead_fraction_2core.json")["rows"]}
-    big, small = "armadillo (100k triangles)", ("unit cube", "unit square", "armadillo (20k triangles)")
-    work = {step: load(f"work_model_2core_armadillo_100k_issue48_{step}.json")["launches"]
-            for step in ("step6", "step7")}
     peak7 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
                             (RESULTS / "memory_h100_issue48_step7b.txt").read_text()))
     cold7 = float(re.search(r"cache empty: ([0-9.]+) s", (RESULTS / "compile_h100_issue48_step7b.txt").read_text())[1])
-    step7_files = [f"armadillo_100k_h100_issue48_step7_{name}.json" for name in turns if name.endswith("base")]
-    step7_files += [f"{case}_h100_issue48_step7_base.json" for case in ("armadillo_1m", "cube_1m")]
-    step7_files += ["armadillo_100k_h100_issue48_step7b_base.json"]
-    step7_files += [f"armadillo_100k_h100_issue48_step7_{name}.json" for name in turns if name.endswith("now")]
-    step7_files += ["armadillo_100k_h100_issue48_step7_reach_now.json",
-                    "armadillo_100k_h100host_numba_issue48_step7_now.json",
-                    "armadillo_1m_h100_issue48_step7_now.json", "cube_1m_h100_issue48_step7_now.json",
-                    "square_1m_h100_issue48_step7_now.json", "profile_kernels_h100_armadillo_issue48_step7.json"]
+    step7_files = ["profile_kernels_h100_armadillo_issue48_step7.json"]
     step7_files += [f"{name}_issue48_step7b_now.json" for name in final]
-    step7_files += [f"{case}_1m_h100_backends_issue48_step7c_now.json" for case in ("armadillo", "cube", "square")]
-    step7_files += ["armadillo_100k_h100_backends_issue48_step7c_now.json",
-                    "compile_options_h100_numba_cuda_issue48.json", "ahead_fraction_2core.json",
-                    "work_model_2core_armadillo_100k_issue48_step7.json"]
+    step7_files += ["work_model_2core_armadillo_100k_issue48_step7.json"]
+    step8_files = ["armadillo_100k_h100_numba_cuda_issue48_step8_base.json",
+                   "cuda_compile_h100_issue48_step8_base.json",
+                   "armadillo_100k_h100_numba_cuda_issue48_step8_now.json",
+                   "armadillo_100k_h100_backends_issue48_step8_now.json", "cuda_compile_h100_issue48_step8_now.json",
+                   *[f"{case}_1m_h100_backends_issue48_step8_now.json" for case in ("armadillo", "cube", "square")],
+                   "armadillo_100k_h100_backends_issue48_step8b_now.json", "cuda_compile_2core_issue48_step8.json"]
 
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
     before = load("profile_kernels_h100_armadillo_issue48_before.json")["warp"]
     model7 = load("work_model_2core_armadillo_100k_issue48_step7.json")
     gpu = model7["against"]
     fill = {(row["shape"], row["run"]): row["fill"] for row in load("policy_fill_2core_10k.json")["rows"]}
+
+    heavy = ("move_ids", "converge_all", "clearance_all")
+    heavy_h100 = sum(launches8["now"][name] for name in heavy)
+    heavy_model = sum(model8[name]["seconds"] + model8[name]["ptxas_seconds"] for name in heavy)
+
+    def cuda_1m(case):
+        return seconds(million_cuda[case]["numba-cuda"]["median"])
 
     def parts(run):
         stages, device = run["stages"], run["device"]
@@ -494,15 +504,15 @@ def scale_h100() -> list[str]:
                  names, parts(before), parts(arm3), guess4, parts(arm5_profiled), guess5, parts(arm7_profiled), guess7)]
     rows = [
         ["armadillo (100k triangles)", "100,000", seconds(arm5["median"]), seconds(arm5_cuda["median"]),
-         seconds(arm5_cpu["median"]), f"{arm5['fill']:.4f}", "medians of 3, 1e767cb (NumPy 2.4)"],
+         seconds(arm5_cpu["median"]), f"{arm5['fill']:.4f}", "medians of 3, 640ce8f (NumPy 2.4)"],
         ["unit cube", "100,000", *[seconds(median_of(cube, backend=b)) for b in ("warp", "numba-cuda", "numba")],
          f"{median_of(cube, 'fill', backend='warp'):.4f}", "medians of 2, 4ea141e"],
-        ["armadillo (100k triangles)", "1,000,000", seconds(arm5_1m["median"]), "", "",
-         f"{arm5_1m['fill']:.4f}", "median of 2, 1e767cb"],
-        ["unit cube", "1,000,000", seconds(cube_1m["median"]), "", seconds(cube_1m_cpu["median"]),
-         f"{cube_1m['fill']:.4f}", "median of 2 (numba: 1), 1e767cb"],
-        ["unit square", "1,000,000", seconds(square_1m["median"]), "", seconds(square_1m_cpu["median"]),
-         f"{square_1m['fill']:.4f}", "median of 2 (numba: 1), 1e767cb"],
+        ["armadillo (100k triangles)", "1,000,000", seconds(arm5_1m["median"]), cuda_1m("armadillo"), "",
+         f"{arm5_1m['fill']:.4f}", "median of 2, 1e767cb (numba-cuda: 640ce8f, another lease)"],
+        ["unit cube", "1,000,000", seconds(cube_1m["median"]), cuda_1m("cube"), seconds(cube_1m_cpu["median"]),
+         f"{cube_1m['fill']:.4f}", "median of 2 (numba: 1), 1e767cb (numba-cuda: 640ce8f)"],
+        ["unit square", "1,000,000", seconds(square_1m["median"]), cuda_1m("square"), seconds(square_1m_cpu["median"]),
+         f"{square_1m['fill']:.4f}", "median of 2 (numba: 1), 1e767cb (numba-cuda: 640ce8f)"],
         ["unit cube", "10,000,000", seconds(warp_10m["seconds"]), "", "", f"{warp_10m['fill']:.4f}",
          "one run, e7f6fee"],
     ]
@@ -515,7 +525,8 @@ def scale_h100() -> list[str]:
         "",
         "Fast mode, seed 0: seconds of the whole `nd.pack` call, the final float64 check included, the compile apart",
         "(a warm-up packing first). numba-cuda needs NumPy 2.4, carried to the GPU machine (its image's 2.5 breaks "
-        "numba-cuda's CUDA target): it was not run from 3ffe337 to 9d800f2.",
+        "numba-cuda's CUDA target): it was not run from 3ffe337 to 9d800f2. numba-cuda's figures at a million are of "
+        "another lease than Warp's (beside Warp's there: below).",
         "",
         *table(head, rows),
         f"Warp is {arm5_cpu['median'] / arm5['median']:.1f}x the host's 16 cores on the armadillo at "
@@ -547,52 +558,43 @@ def scale_h100() -> list[str]:
         "set-up is the constants' run's, before the cooperative set-up. A fresh machine's first packing of a mesh, "
         f"with the cooperative module to compile too: {cold['h100']:.1f} s (H100) and {cold['h200']:.1f} s (H200) "
         "([output](../bench/results/compile_h100_issue48_step4.txt)).",
-        "**A round's host work** (seventh step): the late finds' rule (a window of few candidates at the last "
-        "round's size takes the next level's too, `rounds.SMALL_ROUND`) runs in the window's query on the device, four "
-        "launches and one synchronisation where the host took three; an answer's first copy is twice the longer of its "
-        "kernel's last two; and the polish ahead reaches (1 - 0.2)^3 of the frontier, not (1 - 0.2)^2, as a window of "
-        "late finds reaches further down: with a GPU's policies on 2 cores (3 seeds) the armadillo at 100,000 made "
-        f"{sum(fraction[(big, 0.512)]['polish_launches']) / 3:.1f} polish launches a run, not "
-        f"{sum(fraction[(big, 0.64)]['polish_launches']) / 3:.1f}, each as long as a move launch's chain, and "
-        f"filled {fraction[(big, 0.512)]['fill']:.5f} against {fraction[(big, 0.64)]['fill']:.5f}; the cube, the "
-        "square and the 20k armadillo at 10,000 "
-        + ", ".join(f"{fraction[(name, 0.512)]['fill']:.5f} against {fraction[(name, 0.64)]['fill']:.5f}"
-                    for name in small)
-        + " (`python bench/ahead_tail.py --starts 3e-4 --fractions 0.64 0.512 0.4 --large-seeds 3`). The work model "
-        f"counts {work['step7']['syncs']} synchronisations and {work['step7']['launches']:,} launches at 100,000, "
-        f"against {work['step6']['syncs']} and {work['step6']['launches']:,}. On one H100 lease, in turns against "
-        f"9d800f2: {seconds(turns['pass1_base']['median'])} and {seconds(turns['pass2_base']['median'])} before, "
-        f"{seconds(turns['pass1_now']['median'])} and {seconds(turns['pass2_now']['median'])} after (numba "
-        f"{seconds(numba7['median'])}); in one process the old reach took "
-        f"{seconds(reach['warp reach-0.64']['median'])} and the new {seconds(reach['warp now']['median'])}, so the "
-        "reach made the gain, and the exact changes (with the old reach, 9d800f2's rounds and fill) none the lease "
-        "could see; "
-        f"the armadillo at a million {seconds(million[('armadillo_1m', 'base')]['median'])} before, "
-        f"{seconds(million[('armadillo_1m', 'now')]['median'])} after, the cube at a million "
-        f"{seconds(million[('cube_1m', 'base')]['median'])} before and "
-        f"{seconds(million[('cube_1m', 'now')]['median'])} after. "
-        f"On a second lease (the million rows'): {seconds(base7b['median'])} before, {seconds(arm7b['median'])} after, "
-        f"numba {seconds(arm7b_cpu['median'])}. On a third, with NumPy 2.4 carried (the table's first row), numba-cuda "
-        f"took {seconds(arm5_cuda['median'])} (the same rounds as Warp; no cooperative walks: Warp's tiles have no "
-        "numba-cuda counterpart yet), and its tests pass on the H100 "
-        "([output](../bench/results/gpu_tests_h100_issue48_step7c.txt)); its first packing of a mesh on a fresh "
-        f"machine {cold_cuda:.1f} s ([output](../bench/results/compile_h100_issue48_step7c.txt)); without NVVM's "
-        f"optimisation (ndpack's setting since) its kernels compiled in {cuda_noopt['compiles']['numba-cuda']:.0f} s "
-        f"against {cuda_opt['compiles']['numba-cuda']:.0f} s on a fourth lease, and packed as fast "
-        f"({seconds(cuda_noopt['median_s'])} against {seconds(cuda_opt['median_s'])}; "
-        "`bash bench/gpu_issue48_step7.sh cuda-compile`). At a million, beside Warp in one process (another lease), "
-        "numba-cuda took "
-        + ", ".join(f"{seconds(million_cuda[case]['numba-cuda']['median'])} for the {name} (Warp "
+        "**numba-cuda's cooperative walk** (eighth step, `ndpack.backends.numba_cuda_lanes`): Warp's design in "
+        "numba-cuda's dialect. A block of 32 threads walks one prototype's tree, its stack in the launch's dynamic "
+        "shared memory (a static array in a device function reached by two paths is defined twice at NVVM's link), "
+        "each lane's pushes placed by two ballots, the best distance agreed by shuffles; one move kernel and one "
+        "converge kernel serve the cooperative and the serial launches, so nothing more compiles. On one H100 lease "
+        "(NumPy 2.4 carried), the armadillo at 100,000 on numba-cuda took "
+        f"{seconds(lanes8['numba-cuda now']['median'])} with cooperative walks and "
+        f"{seconds(lanes8['numba-cuda lanes-off']['median'])} without (the same kernels' serial path, one process), "
+        f"cf9e21a's {seconds(base8['median'])} (its runs "
+        f"{', '.join(seconds(run) for run in base8['unprofiled'])}): the same {lanes8['numba-cuda now']['rounds']} "
+        "rounds, fill "
+        f"{lanes8['numba-cuda now']['fill']:.5f}; numba on the host's cores {seconds(beside8['numba']['median'])} in "
+        f"the next process ({beside8['numba']['median'] / lanes8['numba-cuda now']['median']:.1f}x), "
+        f"{seconds(arm5_cpu['median'])} in the table's run "
+        f"({arm5_cpu['median'] / arm5_cuda['median']:.1f}x): the margin over 5x is thin. At a million, beside Warp in "
+        "one process: "
+        + ", ".join(f"the {name} {seconds(million_cuda[case]['numba-cuda']['median'])} (Warp "
                     f"{seconds(million_cuda[case]['warp']['median'])})"
                     for case, name in (("armadillo", "armadillo"), ("cube", "cube"), ("square", "square")))
-        + " (`STEP=step7c bash bench/gpu_issue48_step7.sh cuda-million`). "
-        "At 100,000 the GPU's packing fills "
-        f"{arm5['fill']:.5f} against 9d800f2's {base7b['fill']:.5f}. A fresh H100's first packing of a mesh: "
-        f"{cold7:.1f} s ([output](../bench/results/compile_h100_issue48_step7b.txt)); peak memory at a million (whole "
-        f"device): the armadillo {int(peak7['armadillo']):,} MiB, the cube {int(peak7['cube']):,} MiB "
-        "([output](../bench/results/memory_h100_issue48_step7b.txt)). The steps before, and the sixth's figures: "
-        "[benchmarks-history.md](benchmarks-history.md).",
-        *sources(*step7_files, "round_time_h100_cube_issue20_step7.json",
+        + f"; peak memory the armadillo {int(peak8['armadillo']):,} MiB, the cube {int(peak8['cube']):,} MiB "
+        "([output](../bench/results/memory_h100_issue48_step8.txt)). Its tests pass on the H100 "
+        "([output](../bench/results/gpu_tests_h100_issue48_step8b.txt)). A fresh H100's first numba-cuda packing of "
+        f"a mesh took {compile8['now']['first_packing_s']:.1f} s (cf9e21a: {compile8['base']['first_packing_s']:.1f} "
+        f"s), its kernels' first launches {sum(launches8['now'].values()):.1f} s "
+        f"({sum(launches8['base'].values()):.1f} s), of which "
+        + ", ".join(f"{name} {launches8['now'][name]:.1f} s" for name in ("move_ids", "converge_all", "clearance_all"))
+        + ", each compiled for one signature. Compiled to PTX on 2 cores without a GPU (`bench/cuda_compile.py`), "
+        "the same three took "
+        + ", ".join(f"{model8[name]['seconds']:.1f} s in Numba and NVVM and {model8[name]['ptxas_seconds']:.1f} s in "
+                    "ptxas" for name in ("move_ids", "converge_all", "clearance_all"))
+        + f" ({sum(row['seconds'] + row['ptxas_seconds'] for row in model8.values()):.0f} s for all kernels): the "
+        f"H100's host took {heavy_h100 / heavy_model:.1f}x the three's time. Warp's figures of the seventh step "
+        "stand: a fresh H100's first packing of a mesh "
+        f"{cold7:.1f} s ([output](../bench/results/compile_h100_issue48_step7b.txt)), peak memory at a million the "
+        f"armadillo {int(peak7['armadillo']):,} MiB and the cube {int(peak7['cube']):,} MiB. The steps before, and the "
+        "seventh's figures: [benchmarks-history.md](benchmarks-history.md).",
+        *sources(*step8_files, *step7_files, "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
                  "policy_fill_2core_10k.json",
                  "profile_kernels_h200_armadillo_issue48_step4.json",
