@@ -165,7 +165,7 @@ def counting_prototypes(text: str) -> str:
     evaluation = "    feature = sd_feature(x, prm, hint, gap_min)\n"
     assert evaluation in text, "nearest_obstacle's evaluation is not where this script expects it"
     text = text.replace(evaluation, "    prm[prm.shape[0] - 2] += 1.0\n" + evaluation)
-    call = ("        converge_one(i, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, "
+    call = ("        converge_one(i, 0, points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, "
             "out_points,\n                     out_clearance)\n")
     assert call in text, "converge_all is not where this script expects it"
     return cooperative_walk.WALK + text.replace(call, (
