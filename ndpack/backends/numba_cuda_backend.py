@@ -5,7 +5,9 @@ as device functions. The inserted spheres live on the device and only new ones a
 (:class:`~ndpack.backends.device_spheres.DeviceSpheres`), and during a packing so do the
 prototypes (:class:`~ndpack.backends.prototypes.DevicePrototypes`, through :class:`_CudaDevice`);
 the array operations copy their inputs per call. float64 throughout: an H100 runs float64 at
-half its float32 rate, and the packing stays as exact as the CPU's.
+half its float32 rate, and the packing stays as exact as the CPU's. Small move launches and the
+set-up's converge walk a mesh's tree with a block of 32 threads per prototype
+(:mod:`ndpack.backends.numba_cuda_lanes`).
 
 Without a GPU, set ``NUMBA_ENABLE_CUDASIM=1`` to run the same kernels in Numba's CUDA simulator
 (slow; for tests).
