@@ -19,7 +19,9 @@ The time of a kernel includes the device functions compiled for it first (a devi
 typed and lowered once, for the first kernel that calls it); the order is the packing's. On a
 2-core machine the times are about 1.5-2x an H100 host's; the split between kernels is what
 counts. ``--ptxas PATH`` times the compile of each kernel's PTX to SASS as well, which the driver
-does when it loads the kernel on a GPU.
+does when it loads the kernel on a GPU. ``--functions KERNEL ...`` prints those kernels' PTX lines
+by function, and every run lists the device functions compiled more than once (an int constant
+argument is typed as its own literal: each is another copy of the function in each kernel).
 
 On a GPU machine, ``--on-gpu --mesh FILE`` times what a fresh machine does instead: a first packing
 (3 spheres, numba-cuda, fast mode) with ndpack's and the driver's caches empty, each kernel's first
@@ -33,6 +35,7 @@ import argparse
 import json
 import os
 import pickle
+import re
 import subprocess
 import sys
 import tempfile
@@ -139,10 +142,23 @@ def compile_all(args) -> None:
         row = {"kernel": name, "seconds": round(seconds, 2), "ptx_lines": ptx.count("\n")}
         if args.ptxas:
             row["ptxas_seconds"] = round(ptxas_seconds(args.ptxas, ptx, args.cc), 2)
+        if name in args.functions:
+            row["functions"] = ptx_functions(ptx)
+            for function, lines in list(row["functions"].items())[:20]:
+                print(f"    {lines:6d} PTX lines  {function}", flush=True)
         rows.append(row)
         print(f"{name:24s} {seconds:7.2f} s  {row['ptx_lines']:8d} PTX lines  ptxas {row.get('ptxas_seconds', '-')} s",
               flush=True)
-    print(json.dumps({"rows": rows}))
+    # A device function is compiled once for each set of argument types it is called with, and Numba's CUDA
+    # target types an int constant argument as its own literal type: each is another copy in every kernel.
+    copies = {}
+    for namespace in programs.values():
+        for name, value in namespace.items():
+            if name not in ENTRY_NAMES and len(getattr(value, "overloads", ())) > 1:
+                copies[name] = [", ".join(str(t) for t in signature) for signature in value.overloads]
+    for name, signatures in copies.items():
+        print(f"{name}: {len(signatures)} specialisations", flush=True)
+    print(json.dumps({"rows": rows, "specialisations": copies}))
 
 
 def on_gpu(args) -> None:
@@ -187,6 +203,43 @@ def on_gpu(args) -> None:
                       "signatures": {k: v for k, v in signatures.items() if v}}))
 
 
+def python_name(mangled: str) -> str:
+    """The Python name in numba's mangled name: ``_ZN<length><module><length><name>...``."""
+    if not mangled.startswith("_ZN"):
+        return mangled
+    position, parts = 3, []
+    while position < len(mangled) and mangled[position].isdigit():
+        digits = re.match(r"\d+", mangled[position:]).group(0)
+        position += len(digits)
+        parts.append(mangled[position:position + int(digits)])
+        position += int(digits)
+    return parts[-1] if len(parts) > 1 else mangled
+
+
+def ptx_functions(ptx: str) -> dict[str, int]:
+    """PTX lines of each function body (``.entry`` or ``.func``) of a module, the largest first, by
+    the Python name (a specialisation after the first gets a number)."""
+    sizes: dict[str, int] = {}
+    names: dict[str, str] = {}  # mangled -> shown
+    current = None
+    for line in ptx.split("\n"):
+        header = re.match(r"^\.(?:visible |weak )?\.(?:func|entry)\s+(?:\([^)]*\)\s*)?(\S+?)\($", line.strip())
+        if header:
+            mangled = header.group(1)
+            if mangled not in names:
+                name = python_name(mangled)
+                copies = sum(shown.split(" #")[0] == name for shown in names.values())
+                names[mangled] = name if copies == 0 else f"{name} #{copies + 1}"
+            current = names[mangled]
+        elif current and line.strip() == ";":  # a declaration, not a body
+            current = None
+        if current:
+            sizes[current] = sizes.get(current, 0) + 1
+            if line.startswith("}"):
+                current = None
+    return dict(sorted(sizes.items(), key=lambda item: -item[1]))
+
+
 def ptxas_seconds(ptxas: str, ptx: str, cc) -> float:
     """Seconds of ``ptxas`` (at its default -O3, as the driver's JIT) turning ``ptx`` into SASS."""
     with tempfile.TemporaryDirectory() as folder:
@@ -205,6 +258,8 @@ def main(argv=None) -> None:
     parser.add_argument("--grid", type=int, default=4, help="its grid (the simulator runs a thread at a time)")
     parser.add_argument("--cc", type=int, nargs=2, default=[9, 0], help="compute capability compiled for")
     parser.add_argument("--ptxas", help="ptxas to time the PTX's compile to SASS with (the driver does it at load)")
+    parser.add_argument("--functions", nargs="*", default=[], metavar="KERNEL",
+                        help="print these kernels' PTX lines by function")
     parser.add_argument("--on-gpu", action="store_true", help="time a fresh GPU machine's first packing instead")
     parser.add_argument("--mesh", help="the mesh of --on-gpu")
     parser.add_argument("--out", type=Path)
@@ -232,7 +287,7 @@ def main(argv=None) -> None:
         recording = os.path.join(folder, "kernels.pickle")
         common = [sys.executable, __file__, "--shape", args.shape, "--count", str(args.count), "--grid", str(args.grid),
                   "--record", recording, "--cc", *map(str, args.cc),
-                  *(["--ptxas", args.ptxas] if args.ptxas else [])]
+                  *(["--ptxas", args.ptxas] if args.ptxas else []), "--functions", *args.functions]
         env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1", NDPACK_CACHE=folder)
         subprocess.run([*common, "--child", "record"], env=env, check=True)
         env = dict(os.environ, NDPACK_CACHE=folder)
