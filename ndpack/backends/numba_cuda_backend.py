@@ -311,6 +311,7 @@ ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touc
                "gather_ids", "index_bound_ids", "index_fill_ids",
                "near_finish", "move_ids", "set_floats", "lower_floats", "split_mark",
                "split_cut", "cell_distances", "index_clear", "index_insert_range")
+#: Threads of a block in the one-thread-per-item launches; never LANES, which marks a cooperative launch.
 THREADS_PER_BLOCK = 128
 #: NVVM's optimisation of the kernels (numba-cuda's ``opt``; Numba's default is on). Off, a fresh H100's
 #: first compile of the armadillo's kernels took 58 s against 77 s, and 100,000 spheres 1.45 s against

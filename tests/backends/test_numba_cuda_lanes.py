@@ -61,6 +61,13 @@ def lumpy_sphere(subdivisions=1):
     return nd.TriangleMesh(sphere.vertices * lumps[:, None] + [0.2, -0.1, 0.3], sphere.faces)
 
 
+def test_a_plain_launch_is_never_taken_for_a_cooperative_one():
+    """The kernels tell a cooperative launch by its block of LANES threads."""
+    from ndpack.backends.numba_cuda_backend import THREADS_PER_BLOCK
+
+    assert THREADS_PER_BLOCK != LANES
+
+
 def test_copies_call_the_cooperative_chain():
     shape = lumpy_sphere()
     source = compiled_program(shape).program.source("cuda")
