@@ -130,7 +130,7 @@ def compile_all(args) -> None:
                     if name not in ENTRY_NAMES:
                         namespace[name] = cuda.jit(device=True)(namespace[name])
 
-            programs[key] = numba_namespace(program, "cuda", kernels_text(program), jit)
+            programs[key] = numba_namespace(program, "cuda", kernels_text(program.source("cuda")), jit)
         return programs[key]
 
     rows = []

@@ -320,11 +320,11 @@ THREADS_PER_BLOCK = 128
 CUDA_OPT = False
 
 
-def kernels_text(program, simulator: bool = False) -> str:
-    """The backend's functions and entry points for ``program`` in the numba dialect, with the
-    cooperative chain (:func:`~ndpack.backends.numba_cuda_lanes.lanes_text`; its lane primitives
-    through shared memory for Numba's CUDA ``simulator``)."""
-    cooperative = lanes_text(program.source("cuda") + "\n\n" + KERNELS, simulator=simulator)
+def kernels_text(source: str, simulator: bool = False) -> str:
+    """The backend's functions and entry points in the numba dialect for the program whose CUDA
+    ``source`` is given, with the cooperative chain (:func:`~ndpack.backends.numba_cuda_lanes.lanes_text`;
+    its lane primitives through shared memory for Numba's CUDA ``simulator``)."""
+    cooperative = lanes_text(source + "\n\n" + KERNELS, simulator=simulator)
     return KERNELS + cooperative + ENTRIES + STORE_ENTRIES
 
 
@@ -398,8 +398,9 @@ class NumbaCudaBackend(Backend):
 
     def _program_kernels(self, program):
         if id(program) not in self._namespaces:
-            namespace = numba_namespace(program, "cuda", kernels_text(program, self._simulator), self._jit)
-            self._namespaces[id(program)] = (program, namespace, has_walk(program.source("cuda")))
+            source = program.source("cuda")  # rendered once here (numba_namespace renders its own)
+            namespace = numba_namespace(program, "cuda", kernels_text(source, self._simulator), self._jit)
+            self._namespaces[id(program)] = (program, namespace, has_walk(source))
         return self._namespaces[id(program)][1]
 
     def _walks(self, shape) -> bool:

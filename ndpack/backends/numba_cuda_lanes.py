@@ -23,7 +23,7 @@ tests run the walk's logic, and ``bench/cuda_compile.py`` compiles the GPU's tex
 
 from __future__ import annotations
 
-from .warp_lanes import COOPERATIVE_MOST, CONVERGE_MOST, STACK_CAPACITY, chain_copies
+from .warp_lanes import COOPERATIVE_MOST, CONVERGE_MOST, STACK_CAPACITY, chain_copies, visit_node
 
 __all__ = ["CHAIN", "CONVERGE_MOST", "COOPERATIVE_MOST", "LANES", "has_walk", "lanes_text", "shared_bytes"]
 
@@ -67,31 +67,7 @@ def nearest_element_lanes(q, prm, o, limit):
         far = -1
         near = -1
         if node >= 0:
-            b = nodes + size * node
-            if box_squared_distance(q, prm, b) < best:
-                count = int(prm[b + 2 * D + 1])
-                if count > 0:
-                    start = int(prm[b + 2 * D])
-                    for k in range(start, start + count):
-                        d = element_query(q, prm, elements + stride * k, 0)
-                        if d < mine or (d == mine and k < found):
-                            mine = d
-                            found = k
-                else:
-                    left = node + 1
-                    right = int(prm[b + 2 * D])
-                    near_left = box_squared_distance(q, prm, nodes + size * left)
-                    near_right = box_squared_distance(q, prm, nodes + size * right)
-                    if near_left <= near_right:
-                        if near_right < best:
-                            far = right
-                        if near_left < best:
-                            near = left
-                    else:
-                        if near_left < best:
-                            far = left
-                        if near_right < best:
-                            near = right
+VISIT_NODE
         # Each lane's far child, then its near one (popped first), after the lanes below.
         below, pushed = lanes_pushes(far >= 0, near >= 0, lane)
         slot = top - take + below
@@ -110,11 +86,12 @@ def nearest_element_lanes(q, prm, o, limit):
         cuda.syncthreads()
     if pending[CAPACITY + 1] != 0:
         return nearest_element(q, prm, o, limit)
-    # Of the lanes holding the best distance, the smallest element (-1 where none was nearer).
-    key = 2147483647
+    # Of the lanes holding the best distance, the smallest element (-1 where none was nearer; ids are
+    # exact in float64).
+    key = 2147483647.0
     if mine == lanes_min(mine, lane):
-        key = found
-    return lanes_min_int(key, lane)
+        key = float(found)
+    return int(lanes_min(key, lane))
 '''
 
 _WARP_INTRINSICS = '''
@@ -135,10 +112,6 @@ def lanes_min(value, lane):
         shift //= 2
     return value
 
-
-def lanes_min_int(value, lane):
-    """lanes_min of an int."""
-    return lanes_min(value, lane)
 '''
 
 # The simulator's: one shared array a line (it tells allocations apart by their line).
@@ -169,17 +142,6 @@ def lanes_min(value, lane):
         least = min(least, values[k])
     return least
 
-
-def lanes_min_int(value, lane):
-    """lanes_min of an int."""
-    values = cuda.shared.array(LANES, int64)
-    cuda.syncthreads()
-    values[lane] = value
-    cuda.syncthreads()
-    least = values[0]
-    for k in range(1, LANES):
-        least = min(least, values[k])
-    return least
 '''
 
 
@@ -199,8 +161,8 @@ def lanes_text(text: str, simulator: bool = False, capacity: int = STACK_CAPACIT
     program walks a tree, the walk (its stack holding ``capacity`` nodes) and its lane primitives,
     through shared memory for the ``simulator``."""
     present = [name for name in CHAIN if f"\ndef {name}(" in "\n" + text]
-    parts = ["# Cooperative moves: see ndpack.backends.numba_cuda_lanes.", "from numba import int64",
+    parts = ["# Cooperative moves: see ndpack.backends.numba_cuda_lanes.",
              f"LANES = {LANES}", f"CAPACITY = {int(capacity)}", *chain_copies(text, present, decorator="")]
     if has_walk(text):
-        parts += [_WALK, _SHARED_MEMORY if simulator else _WARP_INTRINSICS]
+        parts += [_WALK.replace("VISIT_NODE", visit_node(12)), _SHARED_MEMORY if simulator else _WARP_INTRINSICS]
     return "\n\n".join(parts) + "\n"

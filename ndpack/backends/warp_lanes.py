@@ -57,6 +57,44 @@ COOPERATIVE_MOST = 4096
 #: 0.06 s against 0.24 s (H200, bench/gpu_issue48_step4.sh lanes).
 CONVERGE_MOST = 8192
 
+#: One lane's visit of ``node`` in a cooperative walk, the same in Warp's and numba-cuda's walks (both
+#: dialects read it alike): a leaf's elements nearer than this lane's best (``mine``; of equal distances
+#: the smaller id) update ``mine`` and ``found``; an inner node's children that may hold something nearer
+#: than the block's ``best`` become ``far`` and ``near`` (-1: none), the nearer to be popped first.
+_VISIT_NODE = '''
+b = nodes + size * node
+if box_squared_distance(q, prm, b) < best:
+    count = int(prm[b + 2 * D + 1])
+    if count > 0:
+        start = int(prm[b + 2 * D])
+        for k in range(start, start + count):
+            d = element_query(q, prm, elements + stride * k, 0)
+            if d < mine or (d == mine and k < found):
+                mine = d
+                found = k
+    else:
+        left = node + 1
+        right = int(prm[b + 2 * D])
+        near_left = box_squared_distance(q, prm, nodes + size * left)
+        near_right = box_squared_distance(q, prm, nodes + size * right)
+        if near_left <= near_right:
+            if near_right < best:
+                far = right
+            if near_left < best:
+                near = left
+        else:
+            if near_left < best:
+                far = left
+            if near_right < best:
+                near = right
+'''
+
+
+def visit_node(indent: int) -> str:
+    """:data:`_VISIT_NODE`'s text, each line indented by ``indent`` spaces."""
+    return "\n".join(" " * indent + line if line else line for line in _VISIT_NODE.strip("\n").split("\n"))
+
+
 _NEAREST_LANES = '''
 @wp.func
 def nearest_element_lanes(q: Any, prm: wp.array(dtype=F), o: int, limit: F):
@@ -79,31 +117,7 @@ def nearest_element_lanes(q: Any, prm: wp.array(dtype=F), o: int, limit: F):
         far = int(-1)
         near = int(-1)
         if slot >= 0:
-            b = nodes + size * node
-            if box_squared_distance(q, prm, b) < best:
-                count = int(prm[b + 2 * D + 1])
-                if count > 0:
-                    start = int(prm[b + 2 * D])
-                    for k in range(start, start + count):
-                        d = element_query(q, prm, elements + stride * k, 0)
-                        if d < mine or (d == mine and k < found):
-                            mine = d
-                            found = k
-                else:
-                    left = node + 1
-                    right = int(prm[b + 2 * D])
-                    near_left = box_squared_distance(q, prm, nodes + size * left)
-                    near_right = box_squared_distance(q, prm, nodes + size * right)
-                    if near_left <= near_right:
-                        if near_right < best:
-                            far = right
-                        if near_left < best:
-                            near = left
-                    else:
-                        if near_left < best:
-                            far = left
-                        if near_right < best:
-                            near = right
+VISIT_NODE
         # The nearer child last, so that it is popped first (a later push pops first).
         kept_far = wp.tile_stack_push(pending, far, far >= 0)
         kept_near = wp.tile_stack_push(pending, near, near >= 0)
@@ -128,7 +142,8 @@ def nearest_element_lanes(q: Any, prm: wp.array(dtype=F), o: int, limit: F):
 def nearest_lanes(capacity: int = STACK_CAPACITY, share: int = SHARE_EVERY) -> str:
     """Warp text of ``nearest_element_lanes``, its stack holding ``capacity`` nodes, the lanes
     agreeing on the best distance every ``share`` rounds."""
-    return _NEAREST_LANES.replace("CAPACITY", str(int(capacity))).replace("SHARE", str(int(share)))
+    return (_NEAREST_LANES.replace("VISIT_NODE", visit_node(12)).replace("CAPACITY", str(int(capacity)))
+            .replace("SHARE", str(int(share))))
 
 
 MOVE_KERNEL = '''

@@ -18,6 +18,7 @@ from ndpack.backends.numba_cuda_lanes import CHAIN, LANES, has_walk, lanes_text,
 from ndpack.errors import BackendError
 from ndpack.kernels.compile import numba_namespace
 from ndpack.kernels.compiled import compiled_program
+from walk_checks import check_against_serial
 
 SIMULATED = os.environ.get("NUMBA_ENABLE_CUDASIM") == "1"
 
@@ -107,24 +108,14 @@ def test_small_cooperative_walk_finds_the_serial_nearest(capacity, lanes):
     rng = np.random.default_rng(7)
     points = rng.uniform(-0.8, 0.8, (8 if SIMULATED else 200, 3))  # the surface's normalised coordinates
     prm = cuda.to_device(flat.params)
-    limits = np.full(len(points), 1e30)
-    out = None
-    for run in range(3):  # no limit; the distance itself, widened (a converge step's); one below it
-        if run == 1:
-            limits = out[:, 3] * 1.000001 + 1e-30
-        elif run == 2:
-            limits = out[:, 3] * 0.5
-        d_out = cuda.device_array((len(points), 4))
+
+    def launch(limits):
+        out = cuda.device_array((len(points), 4))
         kernel[len(points), lanes, 0, shared_bytes(capacity)](cuda.to_device(points), prm, o, cuda.to_device(limits),
-                                                              d_out)
-        out = d_out.copy_to_host()
-        if run < 2:
-            assert (out[:, 1] >= 0).all()
-        else:
-            assert (out[:, 0] == -1).all() and (out[:, 1] == -1).all()
-        np.testing.assert_array_equal(out[:, 2], out[:, 3])  # the same distance (ties may differ in element)
-        if capacity == 2 or lanes != LANES:  # the serial walk itself
-            np.testing.assert_array_equal(out[:, 0], out[:, 1])
+                                                              out)
+        return out.copy_to_host()
+
+    check_against_serial(launch, len(points), serial=capacity == 2 or lanes != LANES)
 
 
 @needs_cuda
@@ -153,11 +144,11 @@ def test_small_cooperative_converge_matches_the_cpu(monkeypatch):
     np.testing.assert_allclose(got[0], expected[0], rtol=0, atol=1e-4)
 
 
-@pytest.mark.skipif(not CUDA or SIMULATED, reason="a GPU's test (the simulator would take minutes)")
+@pytest.mark.skipif(not CUDA or SIMULATED, reason="a GPU's test (too slow for the simulator)")
 def test_cooperative_moves_pack_as_the_cpu(monkeypatch):
     """A packing whose moves and converges are all cooperative agrees with numba's on the CPU under
     a GPU's policies (equal distances may pick another element, so as packings, not bit for bit).
-    Under the simulator 3 spheres took 245 s (and agreed to 6e-8 of a radius)."""
+    GPU only: the simulator runs a block's 32 lanes as Python threads, too slowly for a packing."""
     shape = lumpy_sphere()
     count = 40
     packings = []

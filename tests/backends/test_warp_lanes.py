@@ -13,6 +13,7 @@ from ndpack.backends.warp_backend import KERNELS
 from ndpack.backends.warp_lanes import functions_only, has_walk, lanes_text, nearest_lanes
 from ndpack.kernels.compile import warp_module
 from ndpack.kernels.compiled import compiled_program
+from walk_checks import check_against_serial
 
 wp = pytest.importorskip("warp")
 
@@ -65,25 +66,15 @@ def test_cooperative_walk_finds_the_serial_nearest(cpu_blocks, capacity, share, 
     o = int(flat.params[1])
     rng = np.random.default_rng(7)
     points = rng.uniform(-0.8, 0.8, (60, 3))  # the surface's own normalised coordinates
-    limits = np.full(len(points), 1e30)
-    out = None
-    for run in range(3):  # no limit; the distance itself, widened (a converge step's); one below it
-        if run == 1:
-            limits = out[:, 3] * 1.000001 + 1e-30
-        elif run == 2:
-            limits = out[:, 3] * 0.5
-        d_out = wp.zeros((len(points), 4), dtype=wp.float64, device="cpu")
+
+    def launch(limits):
+        out = wp.zeros((len(points), 4), dtype=wp.float64, device="cpu")
         wp.launch_tiled(module.nearest_both, dim=[len(points)], inputs=[
             wp.array(points, dtype=module.VecD, device="cpu"), prm, o,
-            wp.array(limits, dtype=wp.float64, device="cpu"), d_out], block_dim=lanes, device="cpu")
-        out = d_out.numpy()
-        if run < 2:
-            assert (out[:, 1] >= 0).all()
-        else:
-            assert (out[:, 1] == -1).all()
-        np.testing.assert_array_equal(out[:, 2], out[:, 3])  # the same distance (ties may differ in element)
-        if capacity == 2:  # the overflow's fallback is the serial walk itself
-            np.testing.assert_array_equal(out[:, 0], out[:, 1])
+            wp.array(limits, dtype=wp.float64, device="cpu"), out], block_dim=lanes, device="cpu")
+        return out.numpy()
+
+    check_against_serial(launch, len(points), serial=capacity == 2)  # an overflow's fallback is the serial walk
 
 
 def test_copies_call_the_cooperative_chain():
