@@ -162,6 +162,15 @@ SOURCES = {
         ("cuda_compile_h100_issue48_step8_now.json", "compile"),
         *[(f"{case}_1m_h100_backends_issue48_step8_now.json", "million") for case in ("armadillo", "cube", "square")],
         ("armadillo_100k_h100_backends_issue48_step8b_now.json", "backends")]},
+    # The review mend (a7d7ae2: one node-visit text, the smallest element through the float minimum) against 22ea1af,
+    # on another lease: its own first run, then base and now in turn twice (the second pass's files).
+    "armadillo_100k_h100_numba_cuda_issue48_step8c_now.json": Source(
+        "H100", "a7d7ae2", "python3 bench/profile_kernels.py --stages --no-profiled --backends numba-cuda --mesh "
+        "armadillo.obj --count 100000 --repeats 3", "2026-11-27"),
+    **{f"armadillo_100k_h100_numba_cuda_issue48_step8c_turn_{version}.json": Source(
+        "H100", commit, "source bench/gpu_header.sh; for v in base now base now; do kernels $v "
+        "armadillo_100k_h100_numba_cuda_issue48_step8c_turn --backends numba-cuda --mesh armadillo.obj --count 100000 "
+        "--repeats 3; done", "2026-11-27") for version, commit in (("base", "22ea1af"), ("now", "a7d7ae2"))},
     "cuda_compile_2core_issue48_step8.json": Source(
         "2 cores", "640ce8f", "python bench/cuda_compile.py --shape mesh --grid 6 --count 40 --ptxas "
         "/usr/local/cuda-13.0/bin/ptxas --out bench/results/cuda_compile_2core_issue48_step8.json"),
