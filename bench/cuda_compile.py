@@ -109,7 +109,7 @@ def compile_all(args) -> None:
     # A device function asks the current device for its compute capability: there is none here.
     dispatcher.get_current_device = lambda: SimpleNamespace(compute_capability=tuple(args.cc))
     from ndpack.backends.numba_cuda_backend import ENTRY_NAMES, kernels_text
-    from ndpack.kernels.compile import numba_namespace
+    from ndpack.kernels.compile import cuda_device_function, numba_namespace
     from ndpack.kernels.compiled import compiled_program
     from ndpack.kernels.tape import interpreter
 
@@ -128,7 +128,7 @@ def compile_all(args) -> None:
             def jit(namespace, names):
                 for name in names:
                     if name not in ENTRY_NAMES:
-                        namespace[name] = cuda.jit(device=True)(namespace[name])
+                        namespace[name] = cuda_device_function(namespace[name])
 
             programs[key] = numba_namespace(program, "cuda", kernels_text(program.source("cuda")), jit)
         return programs[key]
@@ -167,8 +167,22 @@ def on_gpu(args) -> None:
     import ndpack as nd
     from ndpack.kernels import compile as kernel_compile
 
+    from numba.cuda import codegen
+
     firsts = []
     original = kernel_compile.CudaKernel.__getitem__
+    # Where a first launch's time goes: NVVM (LLVM to PTX), the link (PTX to SASS: the driver's
+    # or nvJitLink's ptxas) and the rest (Numba's typing and lowering, the module's load).
+    spent = {"nvvm": 0.0, "link": 0.0}
+    for method, part in (("get_asm_strs", "nvvm"), ("get_cubin", "link")):
+        def timing(self, *method_args, _original=getattr(codegen.CUDACodeLibrary, method), _part=part, **kw):
+            started = time.perf_counter()
+            try:
+                return _original(self, *method_args, **kw)
+            finally:
+                spent[_part] += time.perf_counter() - started
+
+        setattr(codegen.CUDACodeLibrary, method, timing)
 
     def timed(self, config):
         launch = original(self, config)
@@ -177,10 +191,16 @@ def on_gpu(args) -> None:
             return launch
 
         def first(*launch_args):
+            before = dict(spent)
             started = time.perf_counter()
             result = launch(*launch_args)
-            firsts.append({"kernel": name, "config": str(config), "seconds": round(time.perf_counter() - started, 2)})
-            print(f"{name:24s} {firsts[-1]['seconds']:7.2f} s  (first launch, {config})", flush=True)
+            seconds = time.perf_counter() - started
+            nvvm, link = (spent[part] - before[part] for part in ("nvvm", "link"))
+            link -= nvvm if nvvm and link > nvvm else 0.0  # get_cubin asks for the PTX it lacks
+            firsts.append({"kernel": name, "config": str(config), "seconds": round(seconds, 2),
+                           "nvvm_s": round(nvvm, 2), "link_s": round(link, 2)})
+            print(f"{name:24s} {seconds:7.2f} s  (NVVM {nvvm:.2f} s, link {link:.2f} s; first launch, {config})",
+                  flush=True)
             return result
 
         return first
@@ -199,8 +219,69 @@ def on_gpu(args) -> None:
         for name, value in namespace.items():
             if isinstance(value, kernel_compile.CudaKernel):
                 signatures[name] = len(value.kernel.overloads)
-    print(json.dumps({"first_packing_s": round(first_packing, 2), "first_launches": firsts,
-                      "signatures": {k: v for k, v in signatures.items() if v}}))
+    from numba.cuda.cudadrv import driver
+
+    result = {"first_packing_s": round(first_packing, 2), "first_launches": firsts,
+              "signatures": {k: v for k, v in signatures.items() if v}, "nvjitlink": bool(driver._have_nvjitlink())}
+    if args.link_study:
+        result["link_study"] = link_study(backend, kernel_compile)
+    print(json.dumps(result))
+
+
+def link_study(backend, kernel_compile) -> dict:
+    """The heaviest kernels' PTX linked again (to SASS) one after another, then at once in threads
+    (the driver's link and NVVM release the GIL where the bindings let them), and at other
+    optimisation levels: what a parallel or lighter compile would save."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from cuda.core import Linker, LinkerOptions, ObjectCode
+    from numba.cuda.cudadrv import driver, nvvm
+
+    libraries = {}
+    for entry in backend._namespaces.values():
+        for name, value in entry[1].items():
+            if isinstance(value, kernel_compile.CudaKernel) and name in ("move_ids", "converge_all", "clearance_all"):
+                for overload in value.kernel.overloads.values():
+                    libraries[name] = overload._codelibrary
+    cc = next(iter(libraries.values()))._ensure_cc(None)
+
+    def link(library):
+        started = time.perf_counter()
+        linker = driver._Linker(max_registers=None, cc=cc, lto=False)
+        library._link_all(linker, cc)
+        linker.complete()
+        return time.perf_counter() - started
+
+    def link_at(library, **options):
+        started = time.perf_counter()
+        ptx = "\n".join(library.get_asm_strs(cc=cc)).encode()
+        arch = f"sm_{cc[0]}{cc[1]}{cc[2] if len(cc) > 2 else ''}"
+        Linker(ObjectCode.from_ptx(ptx), options=LinkerOptions(arch=arch, **options)).link("cubin")
+        return time.perf_counter() - started
+
+    def nvvm_once(library):
+        started = time.perf_counter()
+        options = dict(library._nvvm_options, arch=f"compute_{cc[0]}{cc[1]}")
+        nvvm.compile_ir(library.llvm_strs, **options)
+        return time.perf_counter() - started
+
+    study = {"kernels": sorted(libraries)}
+    for label, work in (("link", link), ("nvvm", nvvm_once)):
+        study[f"{label}_serial_s"] = {name: round(work(lib), 2) for name, lib in libraries.items()}
+        started = time.perf_counter()
+        with ThreadPoolExecutor(len(libraries)) as pool:
+            list(pool.map(work, libraries.values()))
+        study[f"{label}_threads_s"] = round(time.perf_counter() - started, 2)
+        print(f"{label}: one after another {study[f'{label}_serial_s']}, in {len(libraries)} threads "
+              f"{study[f'{label}_threads_s']} s", flush=True)
+    for label, options in (("O0", {"optimization_level": 0}), ("ptxas -O1", {"ptxas_options": ["-O1"]}),
+                           ("split 16", {"split_compile": 0})):
+        try:
+            study[label] = {name: round(link_at(lib, **options), 2) for name, lib in libraries.items()}
+        except Exception as error:  # a backend that lacks the option  # noqa: BLE001
+            study[label] = f"{type(error).__name__}: {error}"[:200]
+        print(f"link, {label}: {study[label]}", flush=True)
+    return study
 
 
 def python_name(mangled: str) -> str:
@@ -262,6 +343,8 @@ def main(argv=None) -> None:
                         help="print these kernels' PTX lines by function")
     parser.add_argument("--on-gpu", action="store_true", help="time a fresh GPU machine's first packing instead")
     parser.add_argument("--mesh", help="the mesh of --on-gpu")
+    parser.add_argument("--link-study", action="store_true",
+                        help="with --on-gpu: link the heaviest kernels again, serially, in threads, at other levels")
     parser.add_argument("--out", type=Path)
     parser.add_argument("--child", choices=["record", "compile", "on-gpu"], help=argparse.SUPPRESS)
     parser.add_argument("--record", help=argparse.SUPPRESS)
@@ -275,7 +358,8 @@ def main(argv=None) -> None:
     if args.on_gpu:
         with tempfile.TemporaryDirectory() as folder:
             env = dict(os.environ, NDPACK_CACHE=folder, CUDA_CACHE_DISABLE="1")
-            done = subprocess.run([sys.executable, __file__, "--child", "on-gpu", "--mesh", args.mesh], env=env,
+            study = ["--link-study"] if args.link_study else []
+            done = subprocess.run([sys.executable, __file__, "--child", "on-gpu", "--mesh", args.mesh, *study], env=env,
                                   check=True, stdout=subprocess.PIPE, text=True)
         print(done.stdout, end="")
         result = json.loads(done.stdout.strip().splitlines()[-1])

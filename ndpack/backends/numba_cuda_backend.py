@@ -20,7 +20,7 @@ import weakref
 import numpy as np
 
 from ..errors import BackendError
-from ..kernels.compile import CudaKernel, numba_namespace
+from ..kernels.compile import CudaKernel, cuda_device_function, numba_namespace
 from ..kernels.compiled import compiled_program
 from ..kernels.tape import interpreter
 from .base import Backend, staging_rows, tightened_reach
@@ -386,7 +386,7 @@ class NumbaCudaBackend(Backend):
             if name in ENTRY_NAMES:  # kept on disk, with the device functions compiled into them
                 namespace[name] = CudaKernel(cuda.jit(cache=True, opt=CUDA_OPT)(namespace[name]))
             else:
-                namespace[name] = cuda.jit(device=True)(namespace[name])
+                namespace[name] = cuda_device_function(namespace[name])
 
     def _kernels(self, shape):
         """The compiled namespace that runs ``shape``, its numbers on the device and its

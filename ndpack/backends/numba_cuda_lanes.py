@@ -32,7 +32,7 @@ LANES = 32
 #: The numba functions on the way from the move and the converge to the tree walk, copied with the
 #: ``_lanes`` suffix (the program's, then ``numba_kernels``'s).
 CHAIN = ("surface_feature", "sd_feature", "nearest_obstacle", "free_space", "best_start", "converge_from",
-         "converge_one", "polish_one", "move_one")
+         "converge_one", "move_one")
 
 _WALK = '''
 def nearest_element_lanes(q, prm, o, limit):

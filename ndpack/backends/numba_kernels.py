@@ -221,21 +221,23 @@ def move_one(b, lane, ids, first, first_rows, tries, stream, points, clearance, 
     its cell, where ``b < first_rows``) and ``tries`` random points of its cell drawn from
     ``stream``, converge; keep the result (``polish`` 0), or keep it only if better and mark it
     polished (1). Then, where it was not a polish and the clearance reaches ``polish_low``,
-    polish it with ``polish_steps``; rows from ``polish_from`` on are only polished (the host
-    store's ``move(..., ahead=PolishAhead(...))``). Lane 0 writes: the lanes of a cooperative
-    launch (ndpack.backends.numba_cuda_lanes) all compute the same move."""
+    polish it with ``polish_steps``: converge again from the result, keep it only if better,
+    mark it polished; rows from ``polish_from`` on are only polished (the host store's
+    ``move(..., ahead=PolishAhead(...))``). Lane 0 writes: the lanes of a cooperative launch
+    (ndpack.backends.numba_cuda_lanes) all compute the same move.
+
+    The move and the polish are two passes of one loop, so that the compilers inline the
+    converge (the move kernel's bulk) once: three call sites made numba-cuda's move kernel 14,180
+    PTX lines, a third of its compile."""
     i = ids[b]
     x = point()
     g = point()
     best = point()
     for k in range(D):
         x[k] = points[i, k]
-    if b >= polish_from:
-        polish_one(i, b, lane, x, g, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
-                   polish_steps, h)
-        return
+    moving = b < polish_from
     lead = 1 if b < first_rows else 0
-    if lead + tries > 0:
+    if moving and lead + tries > 0:
         top = nearest_obstacle(x, prm, centers, radii, nbr, b, wall_floor(x, lower, upper, wall, i), -1.0)[0]
         key = restart_key(stream, i)
         for r in range(lead + tries):
@@ -253,32 +255,19 @@ def move_one(b, lane, ids, first, first_rows, tries, stream, points, clearance, 
                 top = c
                 for k in range(D):
                     x[k] = g[k]
-    c = converge_from(x, g, best, i, b, lower, upper, wall, prm, centers, radii, nbr, steps, h)
-    if lane == 0:
-        if polish == 0 or c > clearance[i]:
-            clearance[i] = c
-            for k in range(D):
-                points[i, k] = best[k]
-        polished[i] = polish
-    if polish == 0 and c >= polish_low:
+    for phase in range(0 if moving else 1, 2):  # 0: the move, 1: the polish
+        c = converge_from(x, g, best, i, b, lower, upper, wall, prm, centers, radii, nbr,
+                          steps if phase == 0 else polish_steps, h)
+        if lane == 0:
+            if (phase == 0 and polish == 0) or c > clearance[i]:
+                clearance[i] = c
+                for k in range(D):
+                    points[i, k] = best[k]
+            polished[i] = polish if phase == 0 else 1
+        if phase == 0 and (polish != 0 or c < polish_low):
+            break
         for k in range(D):
             x[k] = best[k]
-        polish_one(i, b, lane, x, g, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
-                   polish_steps, h)
-
-
-def polish_one(i, b, lane, x, g, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
-               steps, h):
-    """Polish prototype ``i`` (row ``b`` of the table) from ``x``, its point: move it with
-    ``steps`` and keep the result only if its clearance grew; mark it polished (lane 0). ``g``
-    and ``best`` are scratch."""
-    c = converge_from(x, g, best, i, b, lower, upper, wall, prm, centers, radii, nbr, steps, h)
-    if lane == 0:
-        if c > clearance[i]:
-            clearance[i] = c
-            for k in range(D):
-                points[i, k] = best[k]
-        polished[i] = 1
 
 
 def near_one(b, lower, upper, reach, centers, radii, out, width):

@@ -54,11 +54,10 @@ MODULES: dict[str, int] = {}
 #: ``WARP_OPTIMIZATION``, the driver's compile of the PTX included;
 #: bench/results/compile_times_h200_issue48_step4.json). On H100s' hosts Numba took 6.0-13.5 s for
 #: the mesh queries, 8.1 s for the 2-D shapes, 8.3 s for the 3-D shapes and 16.0 s for 3-D shapes and
-#: meshes, and numba-cuda 41.6 s for the armadillo's kernels (its first packing, 50.1 s, less the
-#: mesh queries' 8.5 s; bench/results/compile_h100_issue48_step7c.txt), 58 s without NVVM's
-#: optimisation and 77 s with it on a slower lease (compile_options_h100_numba_cuda_issue48.json).
-#: So the estimates are within 2x of each.
-TYPICAL_SECONDS = {"numba": 10, "numba-cuda": 40, "warp": 6, "warp on a GPU": 4}
+#: meshes, and numba-cuda 18.6 s for the kernels of a mesh's first packing (their first launches;
+#: 47.2 s before meshes had their own program and the move kernel one converge:
+#: bench/results/cuda_compile_h100_issue48_step9_now.json). So the estimates are within 2x of each.
+TYPICAL_SECONDS = {"numba": 10, "numba-cuda": 20, "warp": 6, "warp on a GPU": 4}
 #: Warp's CUDA optimisation level for ndpack's modules. At Warp's default (3) a fresh H100's first
 #: packing of a mesh compiled for 90 s (most of it the driver compiling Warp's PTX) and packed the
 #: armadillo's 100,000 spheres in 2.07 s; at 2, 3 s and 2.00 s (medians of 3, the driver's cache
@@ -480,11 +479,7 @@ def numba_namespace(program, target: str, kernels: str, jit_kernels) -> dict:
         The namespace; the backend's entry points are in it by name.
     """
     if target == "cuda":
-        from numba import cuda
-
-        def jit(function):
-            return cuda.jit(device=True)(function)
-
+        jit = cuda_device_function
         imports = "from numba import cuda, float64, int32\n"
         local_point = f"cuda.local.array({program.dim}, float64)"
     else:
@@ -518,6 +513,31 @@ def numba_namespace(program, target: str, kernels: str, jit_kernels) -> dict:
     _checked_disk_caches(namespace)  # before the first call, when Numba reads its index
     _numba_cache[text] = namespace
     return namespace
+
+
+def cuda_device_function(function):
+    """numba-cuda's device function of ``function``, compiled once for each set of argument types
+    with int and float constants typed as their type, not as their value.
+
+    numba-cuda types a constant argument as its own literal, so each constant a function is called
+    with is another copy of it in every kernel that calls it: the mesh's triangle query was three
+    (``want`` 0, 1 and any), 4,500 of the move kernel's 39,700 PTX lines, and the index queries'
+    flags two or three each (``bench/cuda_compile.py`` lists such copies). The branches on such
+    an argument cost a comparison at run time.
+    """
+    from numba import cuda
+    from numba.core import types
+
+    dispatcher = cuda.jit(device=True)(function)
+    if not hasattr(dispatcher, "get_call_template"):  # the simulator's: it compiles nothing
+        return dispatcher
+    resolve = dispatcher.get_call_template
+
+    def get_call_template(args, kws):
+        return resolve(tuple(types.unliteral(a) for a in args), {k: types.unliteral(v) for k, v in kws.items()})
+
+    dispatcher.get_call_template = get_call_template
+    return dispatcher
 
 
 # ---------------------------------------------------------------------------------- Warp

@@ -213,6 +213,8 @@ class Tape:
         params[1] = only[1] if only is not None and only[0] == SURFACE and only[2] < 0 else -1
         users = tuple(self.users[k] for k in order)
         surfaces = self._surfaces if (instructions[:, 0] == SURFACE).any() else None
+        if params[1] >= 0:  # one untransformed mesh or outline: its queries alone, no interpreter
+            return Flat(surface_program(self.dim, surfaces), params, self.device_values)
         return Flat(interpreter(self.dim, users, surfaces), params, self.device_values)
 
 
@@ -251,6 +253,26 @@ def interpreter(dim: int, users: tuple = (), surfaces=None) -> Program:
 
 
 _interpreters: dict[tuple, Program] = {}  # (dim, plug-ins' code, with surfaces) -> program
+
+
+def surface_program(dim: int, surfaces) -> Program:
+    """The program of a tape that is one untransformed mesh (3-D) or outline (2-D) alone: the
+    surface queries (added by ``surfaces``, see :meth:`Tape.surface`) at ``prm[1]``, without the
+    interpreter and the primitives, which such a tape never runs. The entries are the
+    interpreter's for that tape, and the numbers the same. A mesh's first packing compiles less:
+    with :func:`~ndpack.kernels.compile.cuda_device_function`, numba-cuda's clearance kernel for a
+    mesh went from 23,500 PTX lines to 12,200 (``bench/cuda_compile.py``). One per dimension,
+    cached here and on disk."""
+    key = (int(dim), "alone")
+    if key not in _interpreters:
+        program = Program(int(dim), {2: "outlines", 3: "meshes"}[int(dim)])
+        distance = surfaces(program)
+        source = _ALONE.replace("SURFACE_DISTANCE", distance)
+        for text in source.split("\n\n\n"):
+            kernel = Kernel(text.strip() + "\n", callees=program.kernels)
+            program.kernels[kernel.name] = kernel
+        _interpreters[key] = program
+    return _interpreters[key]
 
 
 def _interpreter(dim: int, users: tuple, surfaces) -> Program:
@@ -367,4 +389,22 @@ def {SLOPE}(p, prm, f: float, value: float, k: int):
     if o < 0:
         return 0.0
     return surface_slope(p, prm, o, f, value, k)
+"""
+
+
+# The entries of a surface alone (see surface_program): the interpreter's, where prm[1] >= 0.
+_ALONE = f"""def {ENTRY}(p, prm):
+    return SURFACE_DISTANCE(p, prm, int(prm[1]))
+
+
+def {FEATURE}(p, prm, hint: float, bound: float):
+    return surface_feature(p, prm, int(prm[1]), hint, bound)
+
+
+def {AT_FEATURE}(p, prm, f: float):
+    return surface_distance_at(p, prm, int(prm[1]), f)
+
+
+def {SLOPE}(p, prm, f: float, value: float, k: int):
+    return surface_slope(p, prm, int(prm[1]), f, value, k)
 """

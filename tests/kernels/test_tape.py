@@ -42,17 +42,35 @@ def test_every_tree_of_a_dimension_shares_one_program():
     assert flatten(nd.Ball([0.0] * 4, 1.0)).program is not flatten(ball).program  # another dimension
 
 
-def test_meshes_share_the_program_of_shapes_with_surfaces():
+def test_meshes_alone_share_a_program_without_the_interpreter():
     sphere = nd.TriangleMesh.from_trimesh(trimesh.creation.icosphere(subdivisions=1))
     capsule = nd.TriangleMesh.from_trimesh(trimesh.creation.capsule(height=1.0, radius=0.4))
-    with_box = capsule - nd.Box([0, 0, 0], [1, 1, 1])
-    programs = {id(flatten(shape).program) for shape in (sphere, capsule, with_box)}
-    assert len(programs) == 1
-    assert flatten(sphere).program is not flatten(nd.Ball([0.0] * 3, 1.0)).program
-    assert "meshes" in flatten(sphere).program.title
+    alone = flatten(sphere).program
+    assert flatten(capsule).program is alone and alone.title == "meshes"
+    # Only the surface queries: no interpreter, no primitives (a third less for numba-cuda to compile).
+    assert "tape_primitive" not in alone.kernels and "box" not in alone.kernels and "surface_feature" in alone.kernels
     # A mesh alone (untransformed) gives its gradient to the backends: prm[1] is its block.
     assert flatten(sphere).params[1] == tapes.HEADER
-    assert flatten(with_box).params[1] == -1 and flatten(sphere.translate([1, 0, 0])).params[1] == -1
+    # In a tree, or moved, it is a leaf of the interpreter with surfaces, shared by such trees.
+    with_box = capsule - nd.Box([0, 0, 0], [1, 1, 1])
+    moved = sphere.translate([1, 0, 0])
+    assert flatten(with_box).program is flatten(moved).program is not alone
+    assert "meshes" in flatten(with_box).program.title and "tape_primitive" in flatten(with_box).program.kernels
+    assert flatten(with_box).program is not flatten(nd.Ball([0.0] * 3, 1.0)).program
+    assert flatten(with_box).params[1] == -1 and flatten(moved).params[1] == -1
+
+
+def test_a_mesh_alone_gives_the_interpreters_distances():
+    """The mesh's own program and the interpreter (the mesh as a leaf of a union with itself)
+    give the same distances on numba, to the bit."""
+    from ndpack.backends import get_backend
+
+    mesh = nd.TriangleMesh.from_trimesh(trimesh.creation.capsule(height=1.0, radius=0.4))
+    points = np.random.default_rng(3).uniform(-1.0, 1.0, (200, 3))
+    backend = get_backend("numba")
+    tree = mesh | mesh
+    assert flatten(tree).program is not flatten(mesh).program
+    np.testing.assert_array_equal(backend.distance(mesh, points), backend.distance(tree, points))
 
 
 def test_plugins_key_the_program_by_their_code_not_their_numbers_or_tree():
