@@ -70,7 +70,40 @@ def _compiled():
     """``_build`` compiled by Numba (imported only when a tree is built: ``import ndpack`` stays light)."""
     import numba
 
+    global _stable_order
+    _stable_order = numba.njit(cache=True)(_stable_order)  # compiled first: _build calls it
     return numba.njit(cache=True)(_build)
+
+
+def _stable_order(keys):
+    """The order that sorts ``keys`` (k,) float64, ties in their order: ``np.argsort(keys,
+    kind="mergesort")``, by a heap sort of (key, position) pairs.
+
+    Hand-written for the compile: with the mergesort argsort and arrays indexed by arrays, Numba
+    compiled ``_build`` in 4.4 s, a fresh machine's first mesh waiting; with this and loops, 2.0 s
+    (2 cores). The order is the same, so is the tree.
+    """
+    count = len(keys)
+    index = np.arange(count)
+    heapify = count // 2
+    for turn in range(heapify + count - 1):
+        if turn < heapify:  # build the heap: sift down each inner node, the last first
+            root, size = heapify - 1 - turn, count
+        else:  # move the largest to the end of the heap, which shrinks by one
+            size = count - 1 - (turn - heapify)
+            index[0], index[size] = index[size], index[0]
+            root = 0
+        while 2 * root + 1 < size:
+            child = 2 * root + 1
+            a, b = index[child], index[child + 1] if child + 1 < size else index[child]
+            if child + 1 < size and (keys[a] < keys[b] or (keys[a] == keys[b] and a < b)):
+                child += 1
+            a, b = index[root], index[child]
+            if not (keys[a] < keys[b] or (keys[a] == keys[b] and a < b)):
+                break
+            index[root], index[child] = b, a
+            root = child
+    return index
 
 
 def _build(box_lower, box_upper, centroids, leaf_size, bins, max_depth):
@@ -163,8 +196,15 @@ def _build(box_lower, box_upper, centroids, leaf_size, bins, max_depth):
         middle = i
         if middle == begin or middle == end:  # every centroid in one bin's side: split by count
             middle = (begin + end) // 2
-            keys = centroids[order[begin:end], axis]
-            order[begin:end] = order[begin:end][np.argsort(keys, kind="mergesort")]
+            # In loops: Numba compiles an array indexed by an array for seconds.
+            keys = np.empty(end - begin)
+            ids = np.empty(end - begin, dtype=np.int64)
+            for j in range(end - begin):
+                ids[j] = order[begin + j]
+                keys[j] = centroids[ids[j], axis]
+            sorted_positions = _stable_order(keys)
+            for j in range(end - begin):
+                order[begin + j] = ids[sorted_positions[j]]
         count[node] = 0
         pending[top, 0], pending[top, 1], pending[top, 2], pending[top, 3] = middle, end, node, depth + 1
         (pending[top + 1, 0], pending[top + 1, 1], pending[top + 1, 2],

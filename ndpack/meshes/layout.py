@@ -168,28 +168,44 @@ def _compiled_winding_data():
 
 
 def _winding_data(triangles, lower, upper, first, count):
-    """(m, 7): per node, area vector, area-weighted centroid and a radius enclosing its triangles."""
+    """(m, 7): per node, area vector, area-weighted centroid and a radius enclosing its triangles.
+
+    In scalar loops (the same operations, in the same order, as the array expressions they
+    replaced): Numba compiles those several times slower, and a fresh machine's first mesh waits."""
     n_nodes = len(first)
     data = np.zeros((n_nodes, 7))
     area = np.zeros(n_nodes)
     for k in range(n_nodes - 1, -1, -1):  # children have larger indices than their parent
         if count[k] > 0:
             for j in range(first[k], first[k] + count[k]):
-                a, b, c = triangles[j, 0], triangles[j, 1], triangles[j, 2]
-                vector = 0.5 * np.cross(b - a, c - a)
-                size = np.sqrt(np.sum(vector * vector))
-                data[k, 0:3] += vector
-                data[k, 3:6] += size * (a + b + c) / 3.0
+                u0 = triangles[j, 1, 0] - triangles[j, 0, 0]
+                u1 = triangles[j, 1, 1] - triangles[j, 0, 1]
+                u2 = triangles[j, 1, 2] - triangles[j, 0, 2]
+                v0 = triangles[j, 2, 0] - triangles[j, 0, 0]
+                v1 = triangles[j, 2, 1] - triangles[j, 0, 1]
+                v2 = triangles[j, 2, 2] - triangles[j, 0, 2]
+                w0 = 0.5 * (u1 * v2 - u2 * v1)  # half the cross product: the area vector
+                w1 = 0.5 * (u2 * v0 - u0 * v2)
+                w2 = 0.5 * (u0 * v1 - u1 * v0)
+                size = np.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+                data[k, 0] += w0
+                data[k, 1] += w1
+                data[k, 2] += w2
+                for i in range(3):
+                    data[k, 3 + i] += size * (triangles[j, 0, i] + triangles[j, 1, i] + triangles[j, 2, i]) / 3.0
                 area[k] += size
         else:
             for child in (k + 1, first[k]):
-                data[k, 0:3] += data[child, 0:3]
-                data[k, 3:6] += area[child] * data[child, 3:6]
+                for i in range(3):
+                    data[k, i] += data[child, i]
+                for i in range(3):
+                    data[k, 3 + i] += area[child] * data[child, 3 + i]
                 area[k] += area[child]
-        if area[k] > 0.0:
-            data[k, 3:6] /= area[k]
-        else:
-            data[k, 3:6] = 0.5 * (lower[k] + upper[k])
+        for i in range(3):
+            if area[k] > 0.0:
+                data[k, 3 + i] /= area[k]
+            else:
+                data[k, 3 + i] = 0.5 * (lower[k, i] + upper[k, i])
         # The farthest box corner bounds the distance to every vertex in the node.
         radius = 0.0
         for corner in range(8):

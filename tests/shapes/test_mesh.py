@@ -395,3 +395,16 @@ def test_exact_winding_number_matches_libigl():
         np.testing.assert_allclose(mesh.exact_winding_number(points, caps=caps), expected, rtol=0, atol=1e-12)
     with pytest.raises(nd.ParameterError, match="independent=True checks triangle meshes"):
         nd.verify(np.zeros((1, 3)), nd.Ball([0, 0, 0], 1.0), radii=[0.5], independent=True)
+
+
+def test_the_trees_sort_is_the_stable_argsort():
+    """The tree's fallback split sorts by a hand-written heap sort (Numba compiles it faster than
+    the mergesort argsort): the same order, ties included."""
+    from ndpack.meshes import bvh
+
+    bvh._compiled()  # compiles _stable_order too
+    rng = np.random.default_rng(5)
+    for count in (0, 1, 2, 3, 8, 17, 300):
+        for keys in (rng.random(count), rng.integers(0, 3, count).astype(np.float64)):
+            np.testing.assert_array_equal(bvh._stable_order(keys), np.argsort(keys, kind="mergesort"))
+
