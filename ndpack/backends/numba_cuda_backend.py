@@ -27,22 +27,13 @@ from .base import Backend, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
 from .numba_common import FD_STEP, KERNELS
 from .numba_cuda_lanes import CONVERGE_MOST, COOPERATIVE_MOST, LANES, has_walk, lanes_text, shared_bytes
-from .prototypes import SPREAD_MAX, DevicePrototypes, no_wall
+from .prototypes import SPREAD_MAX, DevicePrototypes, best_starts, no_wall
 
 ENTRIES = '''
 def clearance_all(points, prm, centers, radii, nbr, h, out, out_direction):
     i = cuda.grid(1)
     if i < points.shape[0]:
         clearance_one(i, points, prm, centers, radii, nbr, h, out, out_direction)
-
-
-def converge_all(points, starts, tries, lower, upper, wall, prm, centers, radii, nbr, steps, h, out_points,
-                 out_clearance):
-    # A block of LANES threads is one point's, which walk together (ndpack.backends.numba_cuda_lanes).
-    i = cuda.blockIdx.x if cuda.blockDim.x == LANES else cuda.grid(1)
-    if i < points.shape[0]:
-        converge_one_lanes(i, cuda.threadIdx.x if cuda.blockDim.x == LANES else 0, points, starts, tries, lower,
-                           upper, wall, prm, centers, radii, nbr, steps, h, out_points, out_clearance)
 
 
 def near_count(lower, upper, reach, centers, radii, counts, out):
@@ -306,7 +297,7 @@ def move_ids(ids, first, first_rows, tries, stream, points, clearance, polished,
         move_one_lanes(b, lane, ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper,
                        wall, prm, centers, radii, nbr, steps, h, polish, polish_steps, polish_low, polish_from)
 '''
-ENTRY_NAMES = ("clearance_all", "converge_all", "near_count", "near_fill", "touched_all",
+ENTRY_NAMES = ("clearance_all", "near_count", "near_fill", "touched_all",
                "select_all", "max_all", "window_count", "window_below", "select_window", "touched_index_select",
                "gather_ids", "index_bound_ids", "index_fill_ids",
                "near_finish", "move_ids", "set_floats", "lower_floats", "split_mark",
@@ -440,20 +431,33 @@ class NumbaCudaBackend(Backend):
 
     def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None,
                  starts=None):
+        """The base class's converge, run by the move kernel (``move_ids``: each point its own cell and
+        neighbour row, no restarts, no polish), so that a packing compiles one heavy kernel fewer: the
+        converge kernel was 5.5 s of a fresh H100's first compile of a mesh (bench/cuda_compile.py
+        --on-gpu). Each point starts from the best of it and ``starts`` by clearance, the first of
+        equals, as numba's ``best_start`` chooses; the result is numba's."""
+        if starts is not None and len(starts):
+            points = best_starts(self, shape, np.concatenate([_f64(points)[None], _f64(starts)]), centers, radii,
+                                 neighbours)[0]
+        count = len(points)
+        if count == 0:
+            return np.zeros((0, shape.dim)), np.zeros(0)
         namespace, params, h = self._kernels(shape)
         d_centers, d_radii, table = self._spheres_and_table(centers, radii, neighbours)
         to = self.cuda.to_device
-        out_points = self.cuda.device_array(points.shape, dtype=np.float64)
-        out_clearance = self.cuda.device_array(len(points), dtype=np.float64)
-        wall = no_wall(len(points)) if wall is None else wall
-        tries = 0 if starts is None else len(starts)
-        starts = _f64(starts) if tries else np.zeros((1, len(points), shape.dim))
-        args = (to(_f64(points)), to(starts), tries, to(_f64(cell_lower)), to(_f64(cell_upper)), to(_f64(wall)), params,
-                d_centers, d_radii, table, to(_f64(steps)), h, out_points, out_clearance)
-        if 0 < len(points) <= self.cooperative_converge_most and self._walks(shape):
-            namespace["converge_all"][len(points), LANES, 0, shared_bytes()](*args)  # a block of lanes per point
+        out_points = to(_f64(points).reshape(count, shape.dim))
+        out_clearance = self.cuda.device_array(count, dtype=np.float64)
+        polished = self.cuda.device_array(count, dtype=np.int64)
+        wall = no_wall(count) if wall is None else wall
+        d_steps = to(_f64(steps))
+        # The store's argument types exactly (DevicePrototypes.move), so that move_ids compiles once.
+        args = (to(np.arange(count, dtype=np.int64)), self.cuda.device_array((1, shape.dim)), 0, 0, np.uint64(0),
+                out_points, out_clearance, polished, to(_f64(cell_lower)), to(_f64(cell_upper)), to(_f64(wall)), params,
+                d_centers, d_radii, table, d_steps, h, 0, 1, d_steps, float(np.inf), count)
+        if count <= self.cooperative_converge_most and self._walks(shape):
+            namespace["move_ids"][count, LANES, 0, shared_bytes()](*args)  # a block of lanes per point
         else:
-            self._launch(namespace["converge_all"], len(points), *args)
+            self._launch(namespace["move_ids"], count, *args)
         return out_points.copy_to_host(), out_clearance.copy_to_host()
 
     def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):

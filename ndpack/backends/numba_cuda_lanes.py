@@ -9,10 +9,10 @@ hold something nearer (each lane's two in lane order: a ballot counts the pushes
 below), and agree on the best distance so far (a butterfly of shuffles). Lane 0 writes.
 
 One kernel serves both launches, so that numba-cuda compiles the move (the longest of its
-compiles) once: ``move_ids`` and ``converge_all`` run the ``_lanes`` copies of the chain from the
-move to the walk (:func:`ndpack.backends.warp_lanes.chain_copies`), and the walk is cooperative
-only in a block of exactly :data:`LANES` threads (the backend's cooperative launch: a block per
-prototype); in any other launch each thread walks alone, as the serial kernel does.
+compiles) once: ``move_ids`` (which also runs the backend's converge) runs the ``_lanes`` copies of
+the chain from the move to the walk (:func:`ndpack.backends.warp_lanes.chain_copies`), and the walk
+is cooperative only in a block of exactly :data:`LANES` threads (the backend's cooperative launch:
+a block per prototype); in any other launch each thread walks alone, as the serial kernel does.
 
 The answer is the walk's: the nearest element closer than the limit, and of equal distances the
 smallest id (the serial walk keeps the first it meets). A stack that would overflow makes every
@@ -29,10 +29,9 @@ __all__ = ["CHAIN", "CONVERGE_MOST", "COOPERATIVE_MOST", "LANES", "has_walk", "l
 
 #: Threads of a cooperative block: one warp (the ballot's and the shuffles' mask is the whole warp).
 LANES = 32
-#: The numba functions on the way from the move and the converge to the tree walk, copied with the
-#: ``_lanes`` suffix (the program's, then ``numba_kernels``'s).
-CHAIN = ("surface_feature", "sd_feature", "nearest_obstacle", "free_space", "best_start", "converge_from",
-         "converge_one", "move_one")
+#: The numba functions on the way from the move to the tree walk, copied with the ``_lanes`` suffix
+#: (the program's, then ``numba_kernels``'s).
+CHAIN = ("surface_feature", "sd_feature", "nearest_obstacle", "free_space", "converge_from", "move_one")
 
 _WALK = '''
 def nearest_element_lanes(q, prm, o, limit):
