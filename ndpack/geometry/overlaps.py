@@ -40,6 +40,8 @@ import math
 
 import numpy as np
 
+from ..parallel import run_in_slices
+
 #: Most rows along an axis of one octave's grid: a row's coordinates are packed into one int64
 #: key of :data:`BITS` bits an axis. A finer grid (tiny spheres spread far) returns None, and the
 #: caller uses its k-d trees.
@@ -55,7 +57,7 @@ DENSE = 4
 #: rounding of a place in rows (2**-31 of the reach or of a row) and of the chord's square root of
 #: a difference of squares (2**-25 of the reach).
 SLACK = 2.0**-20
-#: Spheres a parallel task takes at a time.
+#: Below this many spheres the scan runs on one thread.
 BLOCK = 64
 #: Fibonacci hashing's multiplier, 2**64 / golden ratio, as an int64 (products wrap).
 GOLDEN = -7046029254386353131
@@ -93,7 +95,7 @@ def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0):
     present = np.bincount(octave - low) > 0  # octaves numbered from 0 up, the empty ones left out
     level = (np.cumsum(present) - 1)[octave - low]
     levels = int(present.sum())
-    boxes, build, scan, chunks = _kernels()
+    boxes, build, scan = _kernels()
     lower, upper, largest, members = boxes(centers, radii, level, levels)
     side = 2 * largest + tol
     with np.errstate(over="ignore", invalid="ignore"):
@@ -123,35 +125,32 @@ def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0):
     found = np.zeros(count, dtype=np.int64)
     worst = np.full(count, -np.inf)
     pairs = np.zeros((0, 2), dtype=np.int64)
-    with chunks(1):  # blocks handed out one at a time: those of large spheres take longer
-        scan(*grid, False, found, pairs, found, worst)
-        if found.any():  # a second pass writes the pairs (a valid packing has none)
-            offsets = np.concatenate([[0], np.cumsum(found)[:-1]])
-            pairs = np.zeros((int(found.sum()), 2), dtype=np.int64)
-            scan(*grid, True, offsets, pairs, found, worst)
+    # Many slices a thread: the large spheres' take longer.
+    run_in_slices(scan, count, *grid, False, found, pairs, found, worst, serial_below=BLOCK, slices_per_thread=16)
+    if found.any():  # a second pass writes the pairs (a valid packing has none)
+        offsets = np.concatenate([[0], np.cumsum(found)[:-1]])
+        pairs = np.zeros((int(found.sum()), 2), dtype=np.int64)
+        run_in_slices(scan, count, *grid, True, offsets, pairs, found, worst, serial_below=BLOCK,
+                      slices_per_thread=16)
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))], float(worst.max())
 
 
 @functools.cache
 def _kernels():
-    """``_boxes``, ``_build`` and ``_scan`` compiled by Numba, and Numba's chunk size of a
-    parallel loop (imported at the first check, so ``import ndpack`` stays light)."""
+    """``_boxes``, ``_build`` and ``_scan`` compiled by Numba, the last releasing the GIL (run in
+    slices by threads: :func:`ndpack.parallel.run_in_slices`), imported at the first check, so
+    ``import ndpack`` stays light."""
     import numba
 
     from ..log import numba_functions
 
-    # 5.0-6.9 s on 2 cores, the first time (a parallel loop): said, like every compile a user waits for.
-    numba_functions(__name__, "the overlap check's grid", 6)
-    global prange, _slot, _row, _chord
-    prange = numba.prange
+    # 2.3-2.9 s on 2 cores, the first time: said, like every compile a user waits for.
+    numba_functions(__name__, "the overlap check's grid", 3)
+    global _slot, _row, _chord
     _slot = numba.njit(cache=True)(_slot)  # compiled first: the kernels call them
     _row = numba.njit(cache=True)(_row)
     _chord = numba.njit(cache=True)(_chord)
-    return (numba.njit(cache=True)(_boxes), numba.njit(cache=True)(_build),
-            numba.njit(parallel=True, cache=True)(_scan), numba.parallel_chunksize)
-
-
-prange = range  # replaced by numba.prange when the kernels are compiled (and the helpers by their compiled selves)
+    return numba.njit(cache=True)(_boxes), numba.njit(cache=True)(_build), numba.njit(nogil=True, cache=True)(_scan)
 
 
 def _slot(table, start, bits, width, c1, c2):
@@ -237,97 +236,96 @@ def _build(centers, level, lower, side, cells, table_start, bits, by_x):
     return table, ids
 
 
-def _scan(ids, centers, radii, level, lower, side, cells, reach, large_side, largest, tol, table, table_start, bits,
-          write, offsets, pairs, found, worst):
-    """Examine the pairs of each sphere, by its position ``p`` in the sorted order (the module
-    docstring): ``found[p]`` how many overlap by more than ``tol``, ``worst[p]`` the largest overlap;
-    with ``write``, the pairs go to ``pairs`` from ``offsets[p]`` on."""
-    count, dim = centers.shape
+def _scan(first, last, ids, centers, radii, level, lower, side, cells, reach, large_side, largest, tol, table,
+          table_start, bits, write, offsets, pairs, found, worst):
+    """Examine the pairs of each sphere at positions ``first`` to ``last`` (exclusive) in the sorted
+    order (the module docstring): ``found[p]`` how many overlap by more than ``tol``, ``worst[p]``
+    the largest overlap; with ``write``, the pairs go to ``pairs`` from ``offsets[p]`` on."""
+    dim = centers.shape[1]
     levels = len(side)
-    for block in prange((count + BLOCK - 1) // BLOCK):
-        low = np.zeros(3, dtype=np.int64)  # rows within reach along axes 1 and 2 (0 and 0 if absent)
-        high = np.zeros(3, dtype=np.int64)
-        own_row = np.zeros(3, dtype=np.int64)
-        where = np.zeros(3)  # the sphere's place in grid m, in rows, along axes 1 and 2
-        for p in range(block * BLOCK, min(count, (block + 1) * BLOCK)):
-            j = ids[p]
-            own = level[j]
-            x = centers[p, 0]
-            best = -np.inf
-            bad = 0
-            for k in range(1, dim):
-                own_row[k] = _row(centers[p, k], lower[own, k], side[own], cells[own, k])
-            for m in range(levels):
-                if m < own:
-                    if not large_side[m, own]:
-                        continue
-                    # As the k-d tree path's query: this sphere's radius, the smaller octave's largest.
-                    within = ((radii[p] + largest[m]) + tol) * (1 + MARGIN)
-                else:
-                    if m > own and large_side[own, m]:
-                        continue
-                    within = reach[own, m]
-                width = cells[m, 1] if dim > 1 else 1
-                within_rows = within / side[m]
-                # Rounding moves a place by far less than this many rows (_chord).
-                slack = SLACK * (1.0 + within_rows)
-                skip = False
-                for k in range(1, dim):
-                    where[k] = (centers[p, k] - lower[m, k]) / side[m]
-                    u_low = (centers[p, k] - within - lower[m, k]) / side[m]
-                    u_high = (centers[p, k] + within - lower[m, k]) / side[m]
-                    if u_high < 0.0 or u_low >= cells[m, k]:
-                        skip = True
-                        break
-                    low[k] = 0 if u_low < 0.0 else int(u_low)
-                    high[k] = cells[m, k] - 1 if u_high >= cells[m, k] - 1 else int(u_high)
-                if skip:
+    low = np.zeros(3, dtype=np.int64)  # rows within reach along axes 1 and 2 (0 and 0 if absent)
+    high = np.zeros(3, dtype=np.int64)
+    own_row = np.zeros(3, dtype=np.int64)
+    where = np.zeros(3)  # the sphere's place in grid m, in rows, along axes 1 and 2
+    for p in range(first, last):
+        j = ids[p]
+        own = level[j]
+        x = centers[p, 0]
+        best = -np.inf
+        bad = 0
+        for k in range(1, dim):
+            own_row[k] = _row(centers[p, k], lower[own, k], side[own], cells[own, k])
+        for m in range(levels):
+            if m < own:
+                if not large_side[m, own]:
                     continue
-                for c2 in range(low[2], high[2] + 1):
-                    for c1 in range(low[1], high[1] + 1):
-                        if m == own and (c2 < own_row[2] or (c2 == own_row[2] and c1 < own_row[1])):
-                            continue  # a row before one's own: that sphere examines the pair
-                        chord = _chord(where[1] - c1, where[2] - c2, within_rows, slack)
-                        if chord < 0.0:
-                            continue
-                        half = chord * side[m] + within * SLACK
-                        x_low, x_high = x - half, x + half
-                        s = _slot(table, table_start[m], bits[m], width, c1, c2)
-                        if table[s, 0] == -1:
-                            continue
-                        start, end = table[s, 1], table[s, 1] + table[s, 2]
-                        if m == own and c1 == own_row[1] and c2 == own_row[2]:
-                            start = p + 1  # one's own row: the spheres after oneself
-                        else:
-                            stop = end
-                            while start < stop:  # the first sphere at or past x_low
-                                middle = (start + stop) // 2
-                                if centers[middle, 0] < x_low:
-                                    start = middle + 1
-                                else:
-                                    stop = middle
-                        for q in range(start, end):
-                            if centers[q, 0] > x_high:
-                                break
-                            # Squares summed in axis order, as np.linalg.norm sums them.
-                            squared = 0.0
-                            for k in range(dim):
-                                delta = centers[q, k] - centers[p, k]
-                                squared += delta * delta
-                            if m == own:
-                                near = side[own]
-                            elif m > own:
-                                near = (radii[q] + largest[own]) + tol
+                # As the k-d tree path's query: this sphere's radius, the smaller octave's largest.
+                within = ((radii[p] + largest[m]) + tol) * (1 + MARGIN)
+            else:
+                if m > own and large_side[own, m]:
+                    continue
+                within = reach[own, m]
+            width = cells[m, 1] if dim > 1 else 1
+            within_rows = within / side[m]
+            # Rounding moves a place by far less than this many rows (_chord).
+            slack = SLACK * (1.0 + within_rows)
+            skip = False
+            for k in range(1, dim):
+                where[k] = (centers[p, k] - lower[m, k]) / side[m]
+                u_low = (centers[p, k] - within - lower[m, k]) / side[m]
+                u_high = (centers[p, k] + within - lower[m, k]) / side[m]
+                if u_high < 0.0 or u_low >= cells[m, k]:
+                    skip = True
+                    break
+                low[k] = 0 if u_low < 0.0 else int(u_low)
+                high[k] = cells[m, k] - 1 if u_high >= cells[m, k] - 1 else int(u_high)
+            if skip:
+                continue
+            for c2 in range(low[2], high[2] + 1):
+                for c1 in range(low[1], high[1] + 1):
+                    if m == own and (c2 < own_row[2] or (c2 == own_row[2] and c1 < own_row[1])):
+                        continue  # a row before one's own: that sphere examines the pair
+                    chord = _chord(where[1] - c1, where[2] - c2, within_rows, slack)
+                    if chord < 0.0:
+                        continue
+                    half = chord * side[m] + within * SLACK
+                    x_low, x_high = x - half, x + half
+                    s = _slot(table, table_start[m], bits[m], width, c1, c2)
+                    if table[s, 0] == -1:
+                        continue
+                    start, end = table[s, 1], table[s, 1] + table[s, 2]
+                    if m == own and c1 == own_row[1] and c2 == own_row[2]:
+                        start = p + 1  # one's own row: the spheres after oneself
+                    else:
+                        stop = end
+                        while start < stop:  # the first sphere at or past x_low
+                            middle = (start + stop) // 2
+                            if centers[middle, 0] < x_low:
+                                start = middle + 1
                             else:
-                                near = (radii[p] + largest[m]) + tol
-                            if squared > near * near:
-                                continue
-                            overlap = (radii[q] + radii[p]) - math.sqrt(squared)
-                            best = max(best, overlap)
-                            if overlap > tol:
-                                if write:
-                                    pairs[offsets[p] + bad, 0] = min(ids[q], j)
-                                    pairs[offsets[p] + bad, 1] = max(ids[q], j)
-                                bad += 1
-            found[p] = bad
-            worst[p] = best
+                                stop = middle
+                    for q in range(start, end):
+                        if centers[q, 0] > x_high:
+                            break
+                        # Squares summed in axis order, as np.linalg.norm sums them.
+                        squared = 0.0
+                        for k in range(dim):
+                            delta = centers[q, k] - centers[p, k]
+                            squared += delta * delta
+                        if m == own:
+                            near = side[own]
+                        elif m > own:
+                            near = (radii[q] + largest[own]) + tol
+                        else:
+                            near = (radii[p] + largest[m]) + tol
+                        if squared > near * near:
+                            continue
+                        overlap = (radii[q] + radii[p]) - math.sqrt(squared)
+                        best = max(best, overlap)
+                        if overlap > tol:
+                            if write:
+                                pairs[offsets[p] + bad, 0] = min(ids[q], j)
+                                pairs[offsets[p] + bad, 1] = max(ids[q], j)
+                            bad += 1
+        found[p] = bad
+        worst[p] = best

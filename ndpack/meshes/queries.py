@@ -1,4 +1,4 @@
-"""Mesh queries on the CPU: the kernel-language functions compiled by Numba, parallel over points.
+"""Mesh queries on the CPU: the kernel-language functions compiled by Numba, run by threads over points.
 
 What the mesh oracle's NumPy-facing methods (and so the numpy backend) call. The traversal is the
 one the compiled backends run (:mod:`ndpack.meshes.kernels`); this module only loops over points.
@@ -12,17 +12,18 @@ import numpy as np
 
 from ..kernels.compile import PARALLEL_FROM, numba_namespace
 from ..kernels.program import Program
+from ..parallel import run_in_slices
 from . import kernels
 
 _LOOPS = '''
-def signed_all(points, prm, out):
-    for i in prange(points.shape[0]):
+def signed_all(first, last, points, prm, out):
+    for i in range(first, last):
         out[i] = surface_distance(points[i], prm, 0)
 
 
-def closest_all(points, prm, limit, signed, out_distance, out_closest, out_triangle):
+def closest_all(first, last, points, prm, limit, signed, out_distance, out_closest, out_triangle):
     scale = prm[2]
-    for i in prange(points.shape[0]):
+    for i in range(first, last):
         q = np.empty(3)
         for j in range(3):
             q[j] = (points[i, j] - prm[3 + j]) / scale
@@ -43,9 +44,9 @@ def closest_all(points, prm, limit, signed, out_distance, out_closest, out_trian
         out_distance[i] = -unsigned if inside else unsigned
 
 
-def winding_all(points, prm, out):
+def winding_all(first, last, points, prm, out):
     scale = prm[2]
-    for i in prange(points.shape[0]):
+    for i in range(first, last):
         q = np.empty(3)
         for j in range(3):
             q[j] = (points[i, j] - prm[3 + j]) / scale
@@ -55,21 +56,20 @@ def winding_all(points, prm, out):
 
 @functools.cache
 def _namespace():
-    """The compiled loops, one parallel and one serial version of each (compiled once, then loaded from disk)."""
+    """The compiled loops, each over a slice of the points and releasing the GIL, so that threads
+    run them (:func:`ndpack.parallel.run_in_slices`; compiled once, then loaded from disk)."""
     import numba
 
     program = Program(3, "mesh queries")
     kernels.add_queries(program)
     for function in (kernels.nearest_element, kernels.triangle_query, kernels.mesh_winding_number):
         program.use(function)
-    serial = _LOOPS.replace("def ", "def serial_")
 
     def jit(namespace, names):
         for name in names:
-            parallel = not name.startswith("serial_")
-            namespace[name] = numba.njit(parallel=parallel, cache=True)(namespace[name])
+            namespace[name] = numba.njit(nogil=True, cache=True)(namespace[name])
 
-    return numba_namespace(program, "cpu", _LOOPS + serial, jit)
+    return numba_namespace(program, "cpu", _LOOPS, jit)
 
 
 #: A mesh query costs microseconds a point, so threads pay from fewer points than the general
@@ -78,9 +78,8 @@ PARALLEL_FROM_MESH = min(PARALLEL_FROM, 1_000)
 
 
 def _run(name: str, points: np.ndarray, *args):
-    namespace = _namespace()
-    loop = namespace[name if len(points) >= PARALLEL_FROM_MESH else f"serial_{name}"]
-    loop(np.ascontiguousarray(points, dtype=np.float64), *args)
+    run_in_slices(_namespace()[name], len(points), np.ascontiguousarray(points, dtype=np.float64), *args,
+                  serial_below=PARALLEL_FROM_MESH)
 
 
 def signed_distance(block: np.ndarray, points: np.ndarray) -> np.ndarray:
