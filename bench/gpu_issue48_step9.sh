@@ -6,6 +6,10 @@
 #        the armadillo, kernel by kernel (Numba, NVVM and the link apart), with this checkout (and the heaviest
 #        kernels linked again: one after another, in threads, at other levels) and with .gpu2/base (BASE, the commit
 #        before the step: git archive BASE ndpack | tar x -C .gpu2/base); Warp's first packing of it
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step9.sh fresh  a fresh machine's first packing of the armadillo,
+#        every cache empty (bench/fresh_machine.py): numba-cuda and Warp, this checkout and .gpu2/base
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step9.sh backends  the armadillo at 100,000 on numba-cuda, Warp
+#        and numba on the host's cores in one process (3 runs each)
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step9.sh cuda  numba-cuda's tests on the device; the armadillo
 #        at 100,000 on numba-cuda with this checkout and .gpu2/base in turns (3 runs each), then numba-cuda, Warp and
 #        numba on the host's cores in one process (3 runs each)
@@ -24,6 +28,15 @@ case "${1:-}" in
     done
     cold_first_packing "$OUT/compile_${CARD}_issue48_${STEP}_warp.txt"
     ;;
+  fresh)
+    need_base fresh
+    for version in now base; do
+      path=$PYTHONPATH
+      [ "$version" = base ] && path=$PWD/.gpu2/base:$PYTHONPATH
+      PYTHONPATH=$path timeout 400 python3 bench/fresh_machine.py --mesh /tmp/armadillo.obj --backends numba-cuda warp \
+        --out "$OUT/fresh_machine_${CARD}_issue48_${STEP}_${version}.json" 2>&1 | grep -v "^Warp\|^Module"
+    done
+    ;;
   cuda)
     need_base cuda
     timeout 300 python3 -m pytest -q -p no:cacheprovider tests/backends/test_numba_cuda_lanes.py \
@@ -38,5 +51,9 @@ case "${1:-}" in
     kernels now "armadillo_100k_${CARD}_backends_issue48_${STEP}" --backends numba-cuda warp numba \
       --mesh /tmp/armadillo.obj --count 100000 --repeats 3
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step9.sh compile|cuda" >&2; exit 2 ;;
+  backends)
+    kernels now "armadillo_100k_${CARD}_backends_issue48_${STEP}" --backends numba-cuda warp numba \
+      --mesh /tmp/armadillo.obj --count 100000 --repeats 3
+    ;;
+  *) echo "usage: bash bench/gpu_issue48_step9.sh compile|fresh|backends|cuda" >&2; exit 2 ;;
 esac

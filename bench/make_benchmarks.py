@@ -174,6 +174,32 @@ SOURCES = {
     "cuda_compile_2core_issue48_step8.json": Source(
         "2 cores", "640ce8f", "python bench/cuda_compile.py --shape mesh --grid 6 --count 40 --ptxas "
         "/usr/local/cuda-13.0/bin/ptxas --out bench/results/cuda_compile_2core_issue48_step8.json"),
+    # Issue 48's ninth step (numba-cuda's compile): bench/gpu_issue48_step9.sh, NumPy 2.4 carried, against 213591c.
+    **{f"cuda_compile_h100_issue48_step9_{version}.json": Source(
+        "H100", commit, "bash bench/gpu_issue48_step9.sh compile", "2026-11-27")
+       for version, commit in (("base", "213591c"), ("now", "0b2cd93"))},
+    **{f"armadillo_100k_h200_numba_cuda_issue48_step9_turn{turn}_{version}.json": Source(
+        "H200", commit, "bash bench/gpu_issue48_step9.sh cuda", "2026-11-27")
+       for turn in (1, 2) for version, commit in (("base", "213591c"), ("now", "0b2cd93"))},
+    "armadillo_100k_h200_backends_issue48_step9_now.json": Source(
+        "H200", "0b2cd93", "bash bench/gpu_issue48_step9.sh cuda", "2026-11-27"),
+    **{f"fresh_machine_h100_issue48_step9b_{version}.json": Source(
+        "H100", commit, "STEP=step9b bash bench/gpu_issue48_step9.sh fresh", "2026-11-27")
+       for version, commit in (("base", "213591c"), ("now", "367b374"))},
+    **{f"armadillo_100k_h100_numba_cuda_issue48_step9b_turn1_{version}.json": Source(
+        "H100", commit, "STEP=step9b bash bench/gpu_issue48_step9.sh cuda (its first turn)", "2026-11-27")
+       for version, commit in (("base", "213591c"), ("now", "367b374"))},
+    **{f"fresh_machine_2core_issue48_step9_{version}.json": Source(
+        "2 cores", commit, f"python bench/fresh_machine.py --mesh armadillo.obj --backends numba --out "
+        f"bench/results/fresh_machine_2core_issue48_step9_{version}.json", "2026-11-27")
+       for version, commit in (("base", "213591c"), ("now", "367b374"))},
+    "armadillo_100k_h100_backends_issue48_step9c_now.json": Source(
+        "H100", "367b374", "STEP=step9c bash bench/gpu_issue48_step9.sh backends", "2026-11-27"),
+    **{f"armadillo_100k_h100_numba_cuda_issue48_step9c_turn{turn}_{version}.json": Source(
+        "H100", commit, "source bench/gpu_header.sh; issue48_inputs; for turn in 1 2; do for v in base now; do "
+        "kernels $v armadillo_100k_h100_numba_cuda_issue48_step9c_turn$turn --backends numba-cuda --mesh "
+        "/tmp/armadillo.obj --count 100000 --repeats 3; done; done", "2026-11-27")
+       for turn in (1, 2) for version, commit in (("base", "213591c"), ("now", "367b374"))},
     "ahead_fraction_2core.json": Source(
         "2 cores", "1e767cb", "python bench/ahead_tail.py --starts 3e-4 --fractions 0.64 0.512 0.4 --large-seeds 3"),
     "work_model_2core_armadillo_100k_issue48_step7.json": Source(
@@ -361,10 +387,14 @@ def _run(name: str) -> tuple:
     return SOURCES[name].machine, SOURCES[name].commit, date(name), versions(name)
 
 
+_cited: set[str] = set()  # the files whose sources the page lists so far
+
+
 def sources(*names: str) -> list[str]:
     """A line per run: its results files, machine and versions, the commit measured, the commands.
 
     Neighbouring files of one machine, commit and day share a line."""
+    _cited.update(names)
     groups: list[list[str]] = []
     for name in names:
         if groups and _run(groups[-1][0]) == _run(name):
@@ -431,20 +461,14 @@ def intro() -> list[str]:
         "## Machines",
         "",
     ]
-    rows = [[name, m.hardware, f"Python {m.python}, NumPy {m.numpy}, {m.libraries}"] for name, m in MACHINES.items()]
+    # The machines of the page's files (the other sections are written first: page()).
+    rows = [[name, m.hardware, f"Python {m.python}, NumPy {m.numpy}, {m.libraries}"] for name, m in MACHINES.items()
+            if name in {SOURCES[file].machine for file in _cited}]
     return lines + table(["machine", "hardware", "software"], rows)
 
 
 def scale_h100() -> list[str]:
     cube = load("round_time_h100_cube_issue20_step7.json")["results"]
-    lanes = load("profile_kernels_h200_armadillo_issue48_step4.json")
-    arm3, arm3_off, converge_off = lanes["warp now"], lanes["warp lanes-off"], lanes["warp converge-off"]
-    arm3_cpu = load("profile_kernels_h200host_numba_armadillo_issue48_step4.json")["numba"]
-    arm3_1m = load("million_h200_armadillo_issue48_step4.json")
-    walk = load("cooperative_walk_2core_armadillo.json")["limits"]["last step's element"]
-    model4 = load("work_model_2core_armadillo_100k_issue48_step4.json")
-    cold = {card: float(re.search(r"cache empty: ([0-9.]+) s", (RESULTS / f"compile_{card}_issue48_step4.txt")
-                                  .read_text())[1]) for card in ("h100", "h200")}
     # Issue 48's seventh step, its second lease (STEP=step7b final): the million rows' Warp and numba.
     final = {name: load(f"{name}_issue48_step7b_now.json") for name in (
         "armadillo_1m_h100", "cube_1m_h100", "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")}
@@ -456,10 +480,13 @@ def scale_h100() -> list[str]:
     beside8 = load("armadillo_100k_h100_backends_issue48_step8_now.json")
     million_cuda = {case: load(f"{case}_1m_h100_backends_issue48_step8_now.json")
                     for case in ("armadillo", "cube", "square")}
-    compile8 = {version: load(f"cuda_compile_h100_issue48_step8_{version}.json") for version in ("now", "base")}
-    launches8 = {version: {row["kernel"]: row["seconds"] for row in compile8[version]["first_launches"]
-                           if row["seconds"] > 0} for version in compile8}
-    model8 = {row["kernel"]: row for row in load("cuda_compile_2core_issue48_step8.json")["rows"]}
+    # Issue 48's ninth step (numba-cuda's compile): one H100 lease's first launches, an H200's and an H100's turns.
+    compile9 = {version: load(f"cuda_compile_h100_issue48_step9_{version}.json") for version in ("now", "base")}
+    launches9 = {version: {row["kernel"]: row["seconds"] for row in compile9[version]["first_launches"]
+                           if row["seconds"] > 0} for version in compile9}
+    turns9c = {version: [load(f"armadillo_100k_h100_numba_cuda_issue48_step9c_turn{turn}_{version}.json")["numba-cuda"]
+                         for turn in (1, 2)] for version in ("base", "now")}
+    beside9 = load("armadillo_100k_h100_backends_issue48_step9c_now.json")
     peak8 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
                             (RESULTS / "memory_h100_issue48_step8.txt").read_text()))
     arm5_1m = final["armadillo_1m_h100"]["warp"]
@@ -467,16 +494,19 @@ def scale_h100() -> list[str]:
     square_1m, square_1m_cpu = final["square_1m_h100"]["warp"], final["square_1m_h100host_numba"]["numba"]
     peak7 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
                             (RESULTS / "memory_h100_issue48_step7b.txt").read_text()))
-    cold7 = float(re.search(r"cache empty: ([0-9.]+) s", (RESULTS / "compile_h100_issue48_step7b.txt").read_text())[1])
     step7_files = ["profile_kernels_h100_armadillo_issue48_step7.json"]
     step7_files += [f"{name}_issue48_step7b_now.json" for name in final]
     step7_files += ["work_model_2core_armadillo_100k_issue48_step7.json"]
     step8_files = ["armadillo_100k_h100_numba_cuda_issue48_step8_base.json",
-                   "cuda_compile_h100_issue48_step8_base.json",
                    "armadillo_100k_h100_numba_cuda_issue48_step8_now.json",
-                   "armadillo_100k_h100_backends_issue48_step8_now.json", "cuda_compile_h100_issue48_step8_now.json",
+                   "armadillo_100k_h100_backends_issue48_step8_now.json",
                    *[f"{case}_1m_h100_backends_issue48_step8_now.json" for case in ("armadillo", "cube", "square")],
-                   "armadillo_100k_h100_backends_issue48_step8b_now.json", "cuda_compile_2core_issue48_step8.json"]
+                   "armadillo_100k_h100_backends_issue48_step8b_now.json"]
+    step9_files = ["cuda_compile_h100_issue48_step9_base.json",  # a line per machine and commit
+                   *[f"armadillo_100k_h100_numba_cuda_issue48_step9c_turn{turn}_base.json" for turn in (1, 2)],
+                   "cuda_compile_h100_issue48_step9_now.json",
+                   *[f"armadillo_100k_h100_numba_cuda_issue48_step9c_turn{turn}_now.json" for turn in (1, 2)],
+                   "armadillo_100k_h100_backends_issue48_step9c_now.json"]
 
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
     before = load("profile_kernels_h100_armadillo_issue48_before.json")["warp"]
@@ -484,9 +514,6 @@ def scale_h100() -> list[str]:
     gpu = model7["against"]
     fill = {(row["shape"], row["run"]): row["fill"] for row in load("policy_fill_2core_10k.json")["rows"]}
 
-    heavy = ("move_ids", "converge_all", "clearance_all")
-    heavy_h100 = sum(launches8["now"][name] for name in heavy)
-    heavy_model = sum(model8[name]["seconds"] + model8[name]["ptxas_seconds"] for name in heavy)
 
     def cuda_1m(case):
         return seconds(million_cuda[case]["numba-cuda"]["median"])
@@ -500,17 +527,8 @@ def scale_h100() -> list[str]:
     names = ["set-up", "move launches", "other launches", "host, in the rounds", "final check", "whole call"]
     arm7_profiled = load("profile_kernels_h100_armadillo_issue48_step7.json")["warp"]
     guess7 = [model7["prediction"][key] for key in ("setup", "moves", "other_launches", "host", "verify", "seconds")]
-    model5 = load("work_model_2core_armadillo_100k_issue48_step5.json")
-    arm5_profiled = load("profile_kernels_h200_armadillo_issue48_step5.json")["warp"]
-    predicted5 = model5["prediction"]
-    guess5 = [predicted5[key] for key in ("setup", "moves", "other_launches", "host", "verify", "seconds")]
-    predicted4 = model4["prediction"]
-    guess4 = [predicted4["setup"], predicted4["moves"], predicted4["other_launches"], predicted4["host"],
-              predicted4["verify"], predicted4["seconds"]]
-    split = [[name, seconds(old), seconds(new4), seconds(model4_), seconds(new5), seconds(model5_), seconds(new7),
-              seconds(model7_)]
-             for name, old, new4, model4_, new5, model5_, new7, model7_ in zip(
-                 names, parts(before), parts(arm3), guess4, parts(arm5_profiled), guess5, parts(arm7_profiled), guess7)]
+    split = [[name, seconds(old), seconds(new7), seconds(model7_)]
+             for name, old, new7, model7_ in zip(names, parts(before), parts(arm7_profiled), guess7)]
     rows = [
         ["armadillo (100k triangles)", "100,000", seconds(arm5["median"]), seconds(arm5_cuda["median"]),
          seconds(arm5_cpu["median"]), f"{arm5['fill']:.4f}", "medians of 3, 640ce8f (NumPy 2.4)"],
@@ -544,29 +562,16 @@ def scale_h100() -> list[str]:
         f"{square_1m_cpu['median'] / square_1m['median']:.1f}x on the square at a million (goals: 5x; 1 s, 8 s, 5 s). "
         f"A GPU's fast mode fills at 10,000 spheres this fraction of the faithful mode's: {policy}.",
         "",
-        "The armadillo at 100,000 by stage (each ends with a device sync) through issue 48's steps, and the work "
+        "The armadillo at 100,000 by stage (each ends with a device sync) before issue 48 and at its seventh step "
+        "(the steps between: the history), and the work "
         "model's predictions from an earlier run's constants and the work counted on 2 cores "
         f"(`bench/work_model.py`; same launches: {'yes' if gpu['same_launches'] else 'no'}):",
         "",
-        *table(["stage", "H100, before (e08d8b4)", "H200, cooperative (39d016d)", "predicted (5d70ad2's constants)",
-                "H200, the host's part (d7c0654)", "predicted (39d016d's)", "H100, the host's work (1e767cb)",
-                "predicted (d7c0654's)"],
-               split),
+        *table(["stage", "H100, before (e08d8b4)", "H100, the host's work (1e767cb)", "predicted (d7c0654's)"], split),
         f"A move launch lasts as long as its slowest thread's chain ({1e6 * gpu['seconds_per_critical_node']:.2f} us a "
         f"node); the host's round takes {gpu['host_over_cpu']:.1f}x its 2-core time. The final check finds overlaps in "
         "a grid's sorted rows (Numba), not k-d trees. Cells split finer (ratio 2.5, not 4) filled 0.5% more in 34 "
         "rounds, but took 2.72 s, not 2.07 s ([output](../bench/results/split_ratio_h100_issue48.txt)).",
-        f"**Cooperative walks**: a block of 32 threads walks one prototype's mesh tree (worst query "
-        f"{walk['serial_nodes_most']:,.0f} nodes, {walk['32: rounds_most']:.0f} rounds), in move launches of at most "
-        "4,096 prototypes and the set-up's converge. An H200 took "
-        f"{seconds(arm3['median'])} at 100,000 (without {seconds(arm3_off['median'])}; without in the set-up "
-        f"{seconds(converge_off['median'])}; numba on its host {seconds(arm3_cpu['median'])}) and "
-        f"{seconds(arm3_1m['warp now']['median'])} at a million (without "
-        f"{seconds(arm3_1m['warp lanes-off']['median'])}). "
-        f"The model's moves (H200): {seconds(predicted4['moves'])} predicted, {seconds(parts(arm3)[1])} measured; its "
-        "set-up is the constants' run's, before the cooperative set-up. A fresh machine's first packing of a mesh, "
-        f"with the cooperative module to compile too: {cold['h100']:.1f} s (H100) and {cold['h200']:.1f} s (H200) "
-        "([output](../bench/results/compile_h100_issue48_step4.txt)).",
         "**numba-cuda's cooperative walk** (eighth step, `ndpack.backends.numba_cuda_lanes`): Warp's design in "
         "numba-cuda's dialect. A block of 32 threads walks one prototype's tree, its stack in the launch's dynamic "
         "shared memory (a static array in a device function reached by two paths is defined twice at NVVM's link), "
@@ -588,31 +593,38 @@ def scale_h100() -> list[str]:
                     for case, name in (("armadillo", "armadillo"), ("cube", "cube"), ("square", "square")))
         + f"; peak memory the armadillo {int(peak8['armadillo']):,} MiB, the cube {int(peak8['cube']):,} MiB "
         "([output](../bench/results/memory_h100_issue48_step8.txt)). Its tests pass on the H100 "
-        "([output](../bench/results/gpu_tests_h100_issue48_step8b.txt)). A fresh H100's first numba-cuda packing of "
-        f"a mesh took {compile8['now']['first_packing_s']:.1f} s (cf9e21a: {compile8['base']['first_packing_s']:.1f} "
-        f"s), its kernels' first launches {sum(launches8['now'].values()):.1f} s "
-        f"({sum(launches8['base'].values()):.1f} s), of which "
-        + ", ".join(f"{name} {launches8['now'][name]:.1f} s" for name in ("move_ids", "converge_all", "clearance_all"))
-        + ", each compiled for one signature. Compiled to PTX on 2 cores without a GPU (`bench/cuda_compile.py`), "
-        "the same three took "
-        + ", ".join(f"{model8[name]['seconds']:.1f} s in Numba and NVVM and {model8[name]['ptxas_seconds']:.1f} s in "
-                    "ptxas" for name in ("move_ids", "converge_all", "clearance_all"))
-        + f" ({sum(row['seconds'] + row['ptxas_seconds'] for row in model8.values()):.0f} s for all kernels): the "
-        f"H100's host took {heavy_h100 / heavy_model:.1f}x the three's time. Warp's figures of the seventh step "
-        "stand: a fresh H100's first packing of a mesh "
-        f"{cold7:.1f} s ([output](../bench/results/compile_h100_issue48_step7b.txt)), peak memory at a million the "
-        f"armadillo {int(peak7['armadillo']):,} MiB and the cube {int(peak7['cube']):,} MiB. The steps before, and the "
-        "seventh's figures: [benchmarks-history.md](benchmarks-history.md).",
-        *sources(*step8_files, *step7_files, "round_time_h100_cube_issue20_step7.json",
+        "([output](../bench/results/gpu_tests_h100_issue48_step8b.txt)); its compile: the eighth step's figures are "
+        "in the history, the ninth's below.",
+        "**numba-cuda's compile** (ninth step): a fresh H100's first packing of a mesh launched kernels for "
+        f"{sum(launches9['base'].values()):.1f} s at 213591c, of which the link (PTX to SASS, nvJitLink) "
+        f"{sum(row['link_s'] for row in compile9['base']['first_launches']):.1f} s and move_ids "
+        f"{launches9['base']['move_ids']:.1f} s: its converge was inlined three times (the move, and the polish "
+        "from two places). With the move and the polish one loop, a mesh alone given its own program (the surface "
+        "queries without the interpreter) and device functions compiled once per argument types (numba-cuda typed "
+        "each int constant as its own literal: three copies of the triangle query), "
+        f"{sum(launches9['now'].values()):.1f} s (0b2cd93; move_ids {launches9['now']['move_ids']:.1f} s, link "
+        f"{sum(row['link_s'] for row in compile9['now']['first_launches']):.1f} s; on 2 cores its PTX went from "
+        "39,677 lines to 20,980); then numba-cuda's converge became a move launch, one heavy kernel fewer: "
+        "the Compile once section's table. Relinking the three heaviest kernels in three threads took "
+        f"{compile9['now']['link_study']['link_threads_s']:.2f} s against "
+        f"{sum(compile9['now']['link_study']['link_serial_s'].values()):.2f} s one after another; ptxas -O1 "
+        f"{sum(compile9['now']['link_study']['ptxas -O1'].values()):.2f} s (neither is used). The packings are the "
+        "same (42 rounds, fill "
+        f"{turns9c['now'][0]['fill']:.5f}); in turns with 213591c, numba-cuda took "
+        + ", ".join(seconds(run["median"]) for run in turns9c["base"]) + " before and "
+        + ", ".join(seconds(run["median"]) for run in turns9c["now"]) + " after on a slow H100 lease (the history has "
+        "an H200's, of 0b2cd93: the same), where "
+        f"numba-cuda took {seconds(beside9['numba-cuda']['median'])}, Warp {seconds(beside9['warp']['median'])} and "
+        f"numba on the host's cores {seconds(beside9['numba']['median'])} in one process "
+        f"({beside9['numba']['median'] / beside9['numba-cuda']['median']:.1f}x, "
+        f"{beside9['numba']['median'] / beside9['warp']['median']:.1f}x): numba-cuda's 5x holds on some leases "
+        "only. numba-cuda's tests pass on the H100 ([output](../bench/results/gpu_tests_h100_issue48_step9b.txt)). "
+        "Warp's peak memory at a million (seventh step): the armadillo "
+        f"{int(peak7['armadillo']):,} MiB, the cube {int(peak7['cube']):,} MiB. The steps before, and their figures: "
+        "[benchmarks-history.md](benchmarks-history.md).",
+        *sources(*step9_files, *step8_files, *step7_files, "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
-                 "policy_fill_2core_10k.json",
-                 "profile_kernels_h200_armadillo_issue48_step4.json",
-                 "profile_kernels_h200host_numba_armadillo_issue48_step4.json",
-                 "million_h200_armadillo_issue48_step4.json", "profile_kernels_h200_armadillo_issue48_step3.json",
-                 "cooperative_walk_2core_armadillo.json", "work_model_2core_armadillo_100k_issue48_step3.json",
-                 "work_model_2core_armadillo_100k_issue48_step4.json",
-                 "profile_kernels_h200_armadillo_issue48_step5.json",
-                 "work_model_2core_armadillo_100k_issue48_step5.json"),
+                 "policy_fill_2core_10k.json"),
     ]
 
 
@@ -852,13 +864,7 @@ def shared_machine() -> list[str]:
 
 def compile_once() -> list[str]:
     user = load("compile_cache_2core_issue19.json")
-    meshes = load("compile_cache_h100_issue19.json")
     rows = [[row["shape"], seconds(row["first"]["wall"]), seconds(row["warm"]["wall"])] for row in user["rows"]]
-    gpu_rows = []
-    for backend in dict.fromkeys(row["backend"] for row in meshes["rows"]):
-        mesh_1, mesh_2 = (first(meshes["rows"], backend=backend, shape=s) for s in ("first mesh", "new mesh"))
-        gpu_rows.append([f"`{backend}`", seconds(mesh_1["first"]["wall"]), seconds(mesh_1["warm"]["wall"]),
-                         seconds(mesh_2["first"]["wall"]), seconds(mesh_2["warm"]["wall"])])
     return [
         "## Compile once",
         "",
@@ -869,11 +875,40 @@ def compile_once() -> list[str]:
         f"2 cores, numba, {user['n']} spheres (the part is `Box(0, side) - Ball(side, 0.6 side)`):",
         "",
         *table(["shape", "first process", "warm re-run"], rows),
-        f"H100, {count(meshes['n'])} spheres, the 20k-triangle armadillo, then fandisk as a new mesh:",
+        *sources("compile_cache_2core_issue19.json"),
+        *fresh_machine(),
+    ]
+
+
+#: A fresh machine's first packing (bench/fresh_machine.py): this code's files and the code before issue 48's
+#: ninth step, measured in the same run.
+FRESH = (("H100", "fresh_machine_h100_issue48_step9b"), ("2 cores", "fresh_machine_2core_issue48_step9"))
+
+
+def fresh_machine() -> list[str]:
+    rows = []
+    names = [f"{stem}_{version}.json" for _, stem in FRESH for version in ("base", "now")]
+    for (machine, stem), version in ((place, version) for place in FRESH for version in ("base", "now")):
+        name = f"{stem}_{version}.json"
+        for row in load(name)["rows"]:
+            titled = {title: value for title, value in row["compile_times"].items() if ":" in title}
+            kernels = sum(value for title, value in titled.items() if not title.startswith("numba:"))
+            rows.append([machine, f"`{row['backend']}`", f"`{SOURCES[name].commit}`", seconds(row["whole_s"]),
+                         seconds(row["load_s"]), seconds(row["first_packing_s"]), seconds(row["next_packing_s"]),
+                         seconds(sum(titled.values())), seconds(kernels) if kernels else ""])
+    return [
+        "A fresh machine's first packing of the armadillo (100k triangles, 3 spheres), every cache empty (ndpack's, "
+        "Numba's, Warp's, the driver's): from `import ndpack` to the spheres (whole), loading the mesh (its tree and "
+        "its queries' compile), the first `nd.pack`, a second in the same process; the compiles ndpack timed, all "
+        "and the GPU kernels' (the rest are Numba's CPU compiles: the mesh queries and the final check's grids, "
+        "which every backend waits for). Issue 48's ninth step gave meshes alone their own program, compiled "
+        "numba-cuda's device functions once per argument types, gave the move one converge and numba-cuda's "
+        "converge to the move kernel, and Numba's CPU compiles of a mesh's tree, winding data, queries and the "
+        "overlap check less work (threads run their loops in slices, not Numba's parallel loops):",
         "",
-        *table(["backend", "first mesh, first process", "warm re-run", "new mesh, first process", "warm re-run"],
-               gpu_rows),
-        *sources("compile_cache_2core_issue19.json", "compile_cache_h100_issue19.json"),
+        *table(["machine", "backend", "code", "whole", "load", "first packing", "the next", "compiles",
+                "of which GPU kernels"], rows),
+        *sources(*names),
     ]
 
 
@@ -1104,7 +1139,9 @@ SECTIONS = (intro, scale_h100, scale_2core, other_shapes_h100, auto_mode, fast_h
 
 
 def page() -> str:
-    lines = [line for section in SECTIONS for line in section()]
+    _cited.clear()
+    rest = [line for section in SECTIONS[1:] for line in section()]
+    lines = SECTIONS[0]() + rest
     while lines and not lines[-1]:
         lines.pop()
     return "\n".join(lines) + "\n"
