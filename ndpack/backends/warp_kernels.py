@@ -719,21 +719,6 @@ def restart_point(key: wp.uint64, t: int, lower: VecD, upper: VecD):
 
 
 @wp.func
-def polish_one(i: int, b: int, lane: int, x: VecD, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
-               polished: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
-               wall: wp.array(dtype=F), prm: wp.array(dtype=F), centers: wp.array(dtype=VecD), radii: wp.array(dtype=F),
-               nbr: wp.array2d(dtype=wp.int32), steps: wp.array(dtype=F), h: F):
-    """Polish prototype ``i`` (row ``b`` of the table) from ``x``, its point: move it with ``steps``
-    and keep the result only if its clearance grew; mark it polished. Lane 0 writes."""
-    best, best_clearance = converge_from(x, lower[i], upper[i], wall[i], prm, centers, radii, nbr, b, steps, h)
-    if lane == 0:
-        if best_clearance > clearance[i]:
-            points[i] = best
-            clearance[i] = best_clearance
-        polished[i] = 1
-
-
-@wp.func
 def move_one(b: int, lane: int, ids: wp.array(dtype=wp.int32), first: wp.array(dtype=VecD), first_rows: int,
              tries: int, stream: wp.uint64, points: wp.array(dtype=VecD), clearance: wp.array(dtype=F),
              polished: wp.array(dtype=wp.int32), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
@@ -744,19 +729,18 @@ def move_one(b: int, lane: int, ids: wp.array(dtype=wp.int32), first: wp.array(d
     cell, where ``b < first_rows``) and ``tries`` random points of its cell drawn from ``stream``,
     converge; keep the result (``polish`` 0), or keep it only if better and mark it polished (1).
     Then, where it was not a polish and the clearance reaches ``polish_low``, polish it with
-    ``polish_steps``; rows from ``polish_from`` on are only polished (the host store's
+    ``polish_steps``: converge again from the result, keep it only if better, mark it polished;
+    rows from ``polish_from`` on are only polished (the host store's
     ``move(..., ahead=PolishAhead(...))``). Lane 0 writes: the lanes of a cooperative launch
-    (ndpack.backends.warp_lanes) all compute the same move."""
+    (ndpack.backends.warp_lanes) all compute the same move. The move and the polish are two passes
+    of one loop, so that the converge is compiled once (as numba's move_one)."""
     i = ids[b]
     x = points[i]
-    if b >= polish_from:
-        polish_one(i, b, lane, x, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
-                   polish_steps, h)
-        return
+    moving = b < polish_from
     lead = int(0)
     if b < first_rows:
         lead = 1
-    if lead + tries > 0:
+    if moving and lead + tries > 0:
         top, nearest, bound, feature = nearest_obstacle(x, prm, centers, radii, nbr, b,
                                                         wall_floor(x, lower[i], upper[i], wall[i]), F(-1.0))
         key = restart_key(stream, i)
@@ -776,15 +760,25 @@ def move_one(b: int, lane: int, ids: wp.array(dtype=wp.int32), first: wp.array(d
             if c > top:
                 top = c
                 x = y
-    best, best_clearance = converge_from(x, lower[i], upper[i], wall[i], prm, centers, radii, nbr, b, steps, h)
-    if lane == 0:
-        if polish == 0 or best_clearance > clearance[i]:
-            points[i] = best
-            clearance[i] = best_clearance
-        polished[i] = polish
-    if polish == 0 and best_clearance >= polish_low:
-        polish_one(i, b, lane, best, points, clearance, polished, lower, upper, wall, prm, centers, radii, nbr,
-                   polish_steps, h)
+    phase = int(1)  # 0: the move, 1: the polish
+    if moving:
+        phase = 0
+    while phase < 2:
+        best, best_clearance = converge_from(x, lower[i], upper[i], wall[i], prm, centers, radii, nbr, b,
+                                             wp.where(phase == 0, steps, polish_steps), h)
+        if lane == 0:
+            if (phase == 0 and polish == 0) or best_clearance > clearance[i]:
+                points[i] = best
+                clearance[i] = best_clearance
+            if phase == 0:
+                polished[i] = polish
+            else:
+                polished[i] = 1
+        if phase == 0 and (polish != 0 or best_clearance < polish_low):
+            phase = 2
+        else:
+            phase = phase + 1
+        x = best
 
 
 @wp.kernel

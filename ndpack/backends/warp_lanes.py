@@ -31,8 +31,7 @@ import re
 
 #: The serial functions on the way from the move kernel to the tree walk, in the order they are
 #: copied (callers after callees is not needed: Warp resolves names at the module's end).
-CHAIN = ("surface_feature", "sd_feature", "nearest_obstacle", "free_space", "converge_from", "polish_one",
-         "move_one")
+CHAIN = ("surface_feature", "sd_feature", "nearest_obstacle", "free_space", "converge_from", "move_one")
 #: Nodes the block's shared stack holds (int32: 4 KB a block); more make the lanes walk alone.
 #: The armadillo's deepest stack at 32 lanes was 310 (no limit) and 121 (the last step's element).
 STACK_CAPACITY = 1024

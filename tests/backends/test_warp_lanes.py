@@ -81,8 +81,7 @@ def test_copies_call_the_cooperative_chain():
     shape = lumpy_sphere(1)
     source = compiled_program(shape).program.source("warp", "float64")
     text = lanes_text(source + "\n\n" + KERNELS)
-    for name in ("surface_feature", "sd_feature", "nearest_obstacle", "free_space", "converge_from",
-                 "polish_one", "move_one"):
+    for name in ("surface_feature", "sd_feature", "nearest_obstacle", "free_space", "converge_from", "move_one"):
         assert f"def {name}_lanes(" in text
         assert f" {name}(" not in text.split("# Cooperative moves")[1].replace(f"def {name}_lanes(", "")
     assert "@wp.kernel" not in functions_only(KERNELS)
