@@ -10,6 +10,9 @@
 #        every cache empty (bench/fresh_machine.py): numba-cuda and Warp, this checkout and .gpu2/base
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step9.sh backends  the armadillo at 100,000 on numba-cuda, Warp
 #        and numba on the host's cores in one process (3 runs each)
+#   source .gpu2/setup.sh && STEP=step9d bash bench/gpu_issue48_step9.sh warp  Warp's move with one converge against
+#        .gpu2/base (1b1777e): a fresh machine's first packing of the armadillo on Warp, then the armadillo at
+#        100,000 on Warp in turns (3 runs each)
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step9.sh cuda  numba-cuda's tests on the device; the armadillo
 #        at 100,000 on numba-cuda with this checkout and .gpu2/base in turns (3 runs each), then numba-cuda, Warp and
 #        numba on the host's cores in one process (3 runs each)
@@ -51,9 +54,24 @@ case "${1:-}" in
     kernels now "armadillo_100k_${CARD}_backends_issue48_${STEP}" --backends numba-cuda warp numba \
       --mesh /tmp/armadillo.obj --count 100000 --repeats 3
     ;;
+  warp)
+    need_base warp
+    for version in now base; do
+      path=$PYTHONPATH
+      [ "$version" = base ] && path=$PWD/.gpu2/base:$PYTHONPATH
+      PYTHONPATH=$path timeout 200 python3 bench/fresh_machine.py --mesh /tmp/armadillo.obj --backends warp \
+        --out "$OUT/fresh_machine_${CARD}_issue48_${STEP}_${version}.json" 2>&1 | grep -v "^Warp\|^Module"
+    done
+    for turn in 1 2; do
+      for version in base now; do
+        kernels "$version" "armadillo_100k_${CARD}_warp_issue48_${STEP}_turn${turn}" --backends warp \
+          --mesh /tmp/armadillo.obj --count 100000 --repeats 3
+      done
+    done
+    ;;
   backends)
     kernels now "armadillo_100k_${CARD}_backends_issue48_${STEP}" --backends numba-cuda warp numba \
       --mesh /tmp/armadillo.obj --count 100000 --repeats 3
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step9.sh compile|fresh|backends|cuda" >&2; exit 2 ;;
+  *) echo "usage: bash bench/gpu_issue48_step9.sh compile|fresh|backends|warp|cuda" >&2; exit 2 ;;
 esac

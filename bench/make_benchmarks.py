@@ -200,6 +200,12 @@ SOURCES = {
         "kernels $v armadillo_100k_h100_numba_cuda_issue48_step9c_turn$turn --backends numba-cuda --mesh "
         "/tmp/armadillo.obj --count 100000 --repeats 3; done; done", "2026-11-27")
        for turn in (1, 2) for version, commit in (("base", "213591c"), ("now", "367b374"))},
+    **{f"fresh_machine_h100_issue48_step9d_{version}.json": Source(
+        "H100", commit, "STEP=step9d bash bench/gpu_issue48_step9.sh warp", "2026-11-27")
+       for version, commit in (("base", "1b1777e"), ("now", "ba917bf"))},
+    **{f"armadillo_100k_h100_warp_issue48_step9d_turn{turn}_{version}.json": Source(
+        "H100", commit, "STEP=step9d bash bench/gpu_issue48_step9.sh warp", "2026-11-27")
+       for turn in (1, 2) for version, commit in (("base", "1b1777e"), ("now", "ba917bf"))},
     "ahead_fraction_2core.json": Source(
         "2 cores", "1e767cb", "python bench/ahead_tail.py --starts 3e-4 --fractions 0.64 0.512 0.4 --large-seeds 3"),
     "work_model_2core_armadillo_100k_issue48_step7.json": Source(
