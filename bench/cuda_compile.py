@@ -228,6 +228,10 @@ def on_gpu(args) -> None:
     print(json.dumps(result))
 
 
+#: The kernels of a mesh's packing that take longest to link (bench/results/cuda_compile_h100_issue48_step9_now.json).
+HEAVIEST = ("move_ids", "clearance_all", "index_fill_ids")
+
+
 def link_study(backend, kernel_compile) -> dict:
     """The heaviest kernels' PTX linked again (to SASS) one after another, then at once in threads
     (the driver's link and NVVM release the GIL where the bindings let them), and at other
@@ -240,7 +244,7 @@ def link_study(backend, kernel_compile) -> dict:
     libraries = {}
     for entry in backend._namespaces.values():
         for name, value in entry[1].items():
-            if isinstance(value, kernel_compile.CudaKernel) and name in ("move_ids", "converge_all", "clearance_all"):
+            if isinstance(value, kernel_compile.CudaKernel) and name in HEAVIEST:
                 for overload in value.kernel.overloads.values():
                     libraries[name] = overload._codelibrary
     cc = next(iter(libraries.values()))._ensure_cc(None)

@@ -62,4 +62,6 @@ def test_a_forked_child_gets_its_own_threads():
     child.join(30)
     if child.exitcode is None:  # waiting for threads it does not have
         child.kill()
-    assert child.exitcode == 0 and queue.get(timeout=5) == 500
+    assert child.exitcode == 0
+    visits = queue.get(timeout=5)
+    assert visits == 500

@@ -445,7 +445,7 @@ class NumbaCudaBackend(Backend):
         namespace, params, h = self._kernels(shape)
         d_centers, d_radii, table = self._spheres_and_table(centers, radii, neighbours)
         to = self.cuda.to_device
-        out_points = to(_f64(points).reshape(count, shape.dim))
+        out_points = to(_f64(points))
         out_clearance = self.cuda.device_array(count, dtype=np.float64)
         polished = self.cuda.device_array(count, dtype=np.int64)
         wall = no_wall(count) if wall is None else wall

@@ -227,8 +227,8 @@ def move_one(b, lane, ids, first, first_rows, tries, stream, points, clearance, 
     (ndpack.backends.numba_cuda_lanes) all compute the same move.
 
     The move and the polish are two passes of one loop, so that the compilers inline the
-    converge (the move kernel's bulk) once: three call sites made numba-cuda's move kernel 14,180
-    PTX lines, a third of its compile."""
+    converge (the move kernel's bulk) once: with three call sites numba-cuda's move kernel itself
+    was 14,180 of its 39,677 PTX lines."""
     i = ids[b]
     x = point()
     g = point()

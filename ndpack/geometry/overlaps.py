@@ -144,7 +144,7 @@ def _kernels():
 
     from ..log import numba_functions
 
-    # 2.3-2.9 s on 2 cores, the first time: said, like every compile a user waits for.
+    # 2.1-2.4 s on 2 cores, the first time: said, like every compile a user waits for.
     numba_functions(__name__, "the overlap check's grid", 3)
     global _slot, _row, _chord
     _slot = numba.njit(cache=True)(_slot)  # compiled first: the kernels call them

@@ -141,6 +141,13 @@ class Program:
         self.kernels[name] = Kernel(source.replace("def _(", f"def {name}(", 1), callees=self.kernels)
         return name
 
+    def add_functions(self, source: str) -> None:
+        """Add the functions of ``source`` (kernel-language text, functions apart by two blank
+        lines) under their own names."""
+        for text in source.split("\n\n\n"):
+            kernel = Kernel(text.strip() + "\n", callees=self.kernels)
+            self.kernels[kernel.name] = kernel
+
     def add_kernel(self, kernel: Kernel) -> str:
         """Add an already checked kernel (a user's plug-in); returns the name to call it by.
 
@@ -216,6 +223,4 @@ def _add_gradient_entries(program: Program, gradient) -> None:
                   f"    return {feature}(p, prm, hint, bound)\n\n\n"
                   f"def {AT_FEATURE}(p, prm, f: float):\n    return {at}(p, prm, f)\n\n\n"
                   f"def {SLOPE}(p, prm, f: float, value: float, k: int):\n    return {slope}(p, prm, f, value, k)\n")
-    for text in source.split("\n\n\n"):
-        kernel = Kernel(text.strip() + "\n", callees=program.kernels)
-        program.kernels[kernel.name] = kernel
+    program.add_functions(source)

@@ -267,10 +267,7 @@ def surface_program(dim: int, surfaces) -> Program:
     if key not in _interpreters:
         program = Program(int(dim), {2: "outlines", 3: "meshes"}[int(dim)])
         distance = surfaces(program)
-        source = _ALONE.replace("SURFACE_DISTANCE", distance)
-        for text in source.split("\n\n\n"):
-            kernel = Kernel(text.strip() + "\n", callees=program.kernels)
-            program.kernels[kernel.name] = kernel
+        program.add_functions(_ALONE.replace("SURFACE_DISTANCE", distance))
         _interpreters[key] = program
     return _interpreters[key]
 
@@ -290,9 +287,7 @@ def _interpreter(dim: int, users: tuple, surfaces) -> Program:
     branches = "".join(f"    if op == {opcode}:\n        return {name}(x, prm, o)\n" for opcode, name in cases)
     for source in (f"def tape_primitive(x, prm, op: int, o: int):\n{branches}    return 0.0\n",
                    _TAPE_LEAF, _sd_source(REGISTERS), NO_GRADIENT if surfaces is None else _GRADIENT):
-        for text in source.split("\n\n\n"):
-            kernel = Kernel(text.strip() + "\n", callees=program.kernels)
-            program.kernels[kernel.name] = kernel
+        program.add_functions(source)
     # Numba calls a function through many arguments (seven per array): the dispatch inlined
     # into sd runs the demo part's distance 1.4-2x as fast (2 cores).
     program.inline.update({"tape_primitive", "tape_leaf"})
