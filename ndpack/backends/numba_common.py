@@ -15,10 +15,13 @@ import sys
 from pathlib import Path
 
 from ..kernels.compile import numba_namespace
+from ..kernels.portable import render
 from ..kernels.tape import interpreter
 
-#: The per-point functions, as text (see numba_kernels.py).
-KERNELS = Path(__file__).with_name("numba_kernels.py").read_text()
+#: The per-point functions, as text (numba_kernels.py), and the sphere index's queries, written once for
+#: every compiled backend (index_kernels.py).
+KERNELS = (Path(__file__).with_name("numba_kernels.py").read_text() + "\n\n"
+           + render(Path(__file__).with_name("index_kernels.py").read_text(), "numba"))
 
 #: Entry points: a parallel loop over prototypes (or boxes) calling the per-point functions.
 ENTRIES = '''

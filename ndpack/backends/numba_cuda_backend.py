@@ -1,12 +1,14 @@
 """The Numba CUDA backend: the Numba backend's per-point work as CUDA kernels, one thread each.
 
-The per-point functions are the CPU backend's (:mod:`ndpack.backends.numba_kernels`), compiled
-as device functions. The inserted spheres live on the device and only new ones are copied up
-(:class:`~ndpack.backends.device_spheres.DeviceSpheres`), and during a packing so do the
-prototypes (:class:`~ndpack.backends.prototypes.DevicePrototypes`, through :class:`_CudaDevice`);
-the array operations copy their inputs per call. float64 throughout: an H100 runs float64 at
-half its float32 rate, and the packing stays as exact as the CPU's. Small move launches and the
-set-up's converge walk a mesh's tree with a block of 32 threads per prototype
+The per-point functions are the CPU backend's (:mod:`ndpack.backends.numba_kernels`), compiled as
+device functions; the prototype store's kernels and the sphere index's queries are written once for
+this backend and Warp's (:mod:`ndpack.backends.store_kernels`,
+:mod:`ndpack.backends.index_kernels`). The inserted spheres live on the device and only new ones
+are copied up (:class:`~ndpack.backends.device_spheres.DeviceSpheres`), and during a packing so do
+the prototypes (:class:`~ndpack.backends.prototypes.DevicePrototypes`, through
+:class:`_CudaDevice`); the array operations copy their inputs per call. float64 throughout: an H100
+runs float64 at half its float32 rate, and the packing stays as exact as the CPU's. Small move
+launches and the set-up's converge walk a mesh's tree with a block of 32 threads per prototype
 (:mod:`ndpack.backends.numba_cuda_lanes`).
 
 Without a GPU, set ``NUMBA_ENABLE_CUDASIM=1`` to run the same kernels in Numba's CUDA simulator
@@ -16,12 +18,14 @@ Without a GPU, set ``NUMBA_ENABLE_CUDASIM=1`` to run the same kernels in Numba's
 from __future__ import annotations
 
 import weakref
+from pathlib import Path
 
 import numpy as np
 
 from ..errors import BackendError
 from ..kernels.compile import CudaKernel, cuda_device_function, numba_namespace
 from ..kernels.compiled import compiled_program
+from ..kernels.portable import kernel_names, render
 from ..kernels.tape import interpreter
 from .base import Backend, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
@@ -54,232 +58,12 @@ def touched_all(points, clearance, centers, radii, out):
         touched_one(i, points, clearance, centers, radii, out)
 '''
 
-# The prototype store's kernels (see ndpack.backends.prototypes.DevicePrototypes): they work on
-# the device-resident prototypes by id, and compact their answers with an atomic counter. Those over
-# every prototype take the store's ``count`` first: its arrays may hold more rows (room to grow).
-STORE_ENTRIES = '''
-def append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags):
-    slot = cuda.atomic.add(counter, 0, 1)
-    out_ids[slot] = i
-    out_values[slot] = clearance[i]
-    for k in range(D):
-        out_points[slot, k] = points[i, k]
-    out_flags[slot] = polished[i]
-    return slot
-
-
-def max_all(count, clearance, below, out):
-    i = cuda.grid(1)
-    if i < count and clearance[i] < below and clearance[i] > out[0]:  # the read spares most atomics
-        cuda.atomic.max(out, 0, clearance[i])
-
-
-# A fast round's window with its late finds, in one query (see the Warp kernels of the same names).
-def late_taken(window, late, floor, few):
-    return window[0] > 0.0 and window[0] >= floor and late[0] < few
-
-
-def window_count(count, clearance, window, relative, low, few, late):
-    i = cuda.grid(1)
-    if i < count:
-        c = clearance[i]
-        top = window[0]
-        if top > 0.0 and c >= max(low, top * (1.0 - relative)) and late[0] < few:
-            cuda.atomic.add(late, 0, 1)
-
-
-def window_below(count, clearance, window, relative, late, floor, few):
-    i = cuda.grid(1)
-    if i < count and late_taken(window, late, floor, few):
-        c = clearance[i]
-        if c < window[0] * (1.0 - relative) and c > window[1]:
-            cuda.atomic.max(window, 1, c)
-
-
-def select_window(count, clearance, polished, points, low, window, relative, late, floor, few, counter, out_ids,
-                  out_values, out_points, out_flags):
-    i = cuda.grid(1)
-    if i < count:
-        frontier = window[0]
-        if late_taken(window, late, floor, few) and window[1] > 0.0:
-            frontier = window[1]
-        if frontier > 0.0 and clearance[i] >= max(low, frontier * (1.0 - relative)):
-            append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
-
-
-def select_all(count, clearance, polished, points, low, high, unpolished, top, relative, counter, out_ids,
-               out_values, out_points, out_flags):
-    i = cuda.grid(1)
-    if i < count:
-        c = clearance[i]
-        lo = low
-        if relative >= 0.0 and top[0] > 0.0:
-            lo = max(lo, top[0] * (1.0 - relative))
-        if c >= lo and c <= high and (unpolished == 0 or polished[i] == 0):
-            append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
-
-
-def touched_index_select(count, points, clearance, polished, centers, radii, origin, top, heads, nxt, level_of,
-                         level_head, level_next, level_count, level_rmax, nearest, counter, out_ids, out_values,
-                         out_points, out_flags):
-    i = cuda.grid(1)
-    if i < count:
-        c = clearance[i]
-        # Touched: a new sphere's gap from the point is below its clearance (the index of the
-        # new spheres tightens the bound below it, and names the nearest new sphere, which goes
-        # back in the flags' place).
-        if c > -math.inf and index_near(i, points, points, c, 0, centers, radii, origin, top, heads, nxt, level_of,
-                                        level_head, level_next, level_count, level_rmax, nearest, i, 1)[0] < c:
-            slot = append(i, points, clearance, polished, counter, out_ids, out_values, out_points, out_flags)
-            out_flags[slot] = nearest[i, 0]
-
-
-def split_mark(count, lower, upper, reach, points, clearance, bound, low, longest, counter, out_ids, out_values,
-               out_points, out_flags):
-    i = cuda.grid(1)
-    if i < count:
-        side = upper[i, 0] - lower[i, 0]
-        for k in range(1, D):
-            side = max(side, upper[i, k] - lower[i, k])
-        if side > longest and bound[i] >= low:
-            c = clearance[i]
-            far2 = 0.0
-            for k in range(D):
-                far = max(points[i, k] - lower[i, k], upper[i, k] - points[i, k])
-                far2 += far * far
-            b = reach[i]
-            if c > -math.inf:  # converged: the attained clearance bounds the cell too
-                b = min(b, c + math.sqrt(far2))
-            bound[i] = min(bound[i], b)
-            if b >= low:
-                slot = cuda.atomic.add(counter, 0, 1)
-                out_ids[slot] = i
-                out_values[slot] = b
-
-
-def split_cut(ids, lower, upper, reach, points, clearance, polished, first_new):
-    b = cuda.grid(1)
-    if b < ids.shape[0]:
-        i = ids[b]
-        j = first_new + b
-        axis = 0
-        side = upper[i, 0] - lower[i, 0]
-        for k in range(1, D):
-            if upper[i, k] - lower[i, k] > side:
-                axis = k
-                side = upper[i, k] - lower[i, k]
-        middle = 0.5 * (lower[i, axis] + upper[i, axis])
-        low_half = points[i, axis] < middle
-        for k in range(D):
-            lower[j, k] = lower[i, k]
-            upper[j, k] = upper[i, k]
-        if low_half:
-            upper[i, axis] = middle
-            lower[j, axis] = middle
-        else:
-            lower[i, axis] = middle
-            upper[j, axis] = middle
-        reach[j] = reach[i]
-        for k in range(D):
-            points[j, k] = 0.5 * (lower[j, k] + upper[j, k])
-        clearance[j] = -math.inf
-        polished[j] = 0
-
-
-def cell_distances(ids, count, first_new, lower, upper, reach, wall, bound, prm, wall_slack):
-    t = cuda.grid(1)
-    if t < 2 * count:
-        row = first_new + t - count
-        if t < count:
-            row = ids[t]
-        centre = point()
-        half2 = 0.0
-        for k in range(D):
-            centre[k] = 0.5 * (lower[row, k] + upper[row, k])
-            side = upper[row, k] - lower[row, k]
-            half2 += side * side
-        distance = sd(centre, prm)
-        reach[row] = min(reach[row], -distance + 0.5 * math.sqrt(half2))
-        wall[row] = -distance - wall_slack
-        bound[row] = reach[row]
-
-
-def gather_ids(ids, points, clearance, polished, out_points, out_clearance, out_flags):
-    b = cuda.grid(1)
-    if b < ids.shape[0]:
-        i = ids[b]
-        for k in range(D):
-            out_points[b, k] = points[i, k]
-        out_clearance[b] = clearance[i]
-        out_flags[b] = polished[i]
-
-
-def index_clear(heads, level_head, level_count, level_rmax):
-    i = cuda.grid(1)
-    if i < heads.shape[0]:
-        heads[i] = -1
-    if i < level_head.shape[0]:
-        level_head[i] = -1
-        level_count[i] = 0
-        level_rmax[i] = 0.0
-
-
-def index_insert_range(start, centers, radii, origin, top, heads, nxt, level_of, level_head, level_next, level_count,
-                       level_rmax):
-    # index_insert with atomics: the lists' order follows them, which no query depends on.
-    s = start + cuda.grid(1)
-    if s < radii.shape[0]:
-        level = index_level(radii[s], top, level_head.shape[0])
-        side = top * 0.5 ** level
-        cell = point()
-        for k in range(D):
-            cell[k] = math.floor((centers[s, k] - origin[k]) / side)
-        nxt[s] = cuda.atomic.exch(heads, index_bucket(level, cell, heads.shape[0] - 1), s)
-        level_of[s] = level
-        level_next[s] = cuda.atomic.exch(level_head, level, s)
-        cuda.atomic.add(level_count, level, 1)
-        cuda.atomic.max(level_rmax, level, radii[s])
-
-
-def index_bound_ids(ids, lower, upper, reach, centers, radii, origin, top, heads, nxt, level_of, level_head,
-                    level_next, level_count, level_rmax, scratch, bound, spread):
-    t = cuda.grid(1)
-    b = t // spread
-    if t % spread == 0 and b < ids.shape[0]:
-        i = ids[b]
-        bound[b] = index_near(i, lower, upper, reach[i], 0, centers, radii, origin, top, heads, nxt, level_of,
-                              level_head, level_next, level_count, level_rmax, scratch, 0, 0)[0]
-
-
-def index_fill_ids(ids, lower, upper, bound, centers, radii, origin, top, heads, nxt, level_of, level_head,
-                   level_next, level_count, level_rmax, found, out, spread):
-    t = cuda.grid(1)
-    b = t // spread
-    if t % spread == 0 and b < ids.shape[0]:
-        found[b] = index_near(ids[b], lower, upper, bound[b], 1, centers, radii, origin, top, heads, nxt, level_of,
-                              level_head, level_next, level_count, level_rmax, out, b, out.shape[1])[1]
-
-
-def near_finish(found, sphere_count, width, out):
-    b = cuda.grid(1)
-    if b < found.shape[0]:
-        for j in range(min(found[b], out.shape[1]), out.shape[1]):
-            out[b, j] = sphere_count
-        cuda.atomic.max(width, 0, found[b])
-
-
-def set_floats(ids, values, out):
-    b = cuda.grid(1)
-    if b < ids.shape[0]:
-        out[ids[b]] = values[b]
-
-
-def lower_floats(ids, values, out):
-    b = cuda.grid(1)
-    if b < ids.shape[0]:
-        out[ids[b]] = min(out[ids[b]], values[b])
-
-
+# The prototype store's kernels over every prototype and by id, and the sphere index's clearing:
+# written once for both GPU backends (ndpack.backends.store_kernels), printed for numba-cuda.
+STORE_TEXT = Path(__file__).with_name("store_kernels.py").read_text()
+STORE_KERNELS = render(STORE_TEXT, "cuda")
+# The move, in numba-cuda's dialect (its cooperative walk has no Warp twin in this form).
+MOVE_ENTRY = '''
 def move_ids(ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper, wall, prm, centers,
              radii, nbr, steps, h, polish, spread, polish_steps, polish_low, polish_from):
     # A block of LANES threads is one prototype's, which walk together (ndpack.backends.numba_cuda_lanes);
@@ -297,11 +81,7 @@ def move_ids(ids, first, first_rows, tries, stream, points, clearance, polished,
         move_one_lanes(b, lane, ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper,
                        wall, prm, centers, radii, nbr, steps, h, polish, polish_steps, polish_low, polish_from)
 '''
-ENTRY_NAMES = ("clearance_all", "near_count", "near_fill", "touched_all",
-               "select_all", "max_all", "window_count", "window_below", "select_window", "touched_index_select",
-               "gather_ids", "index_bound_ids", "index_fill_ids",
-               "near_finish", "move_ids", "set_floats", "lower_floats", "split_mark",
-               "split_cut", "cell_distances", "index_clear", "index_insert_range")
+ENTRY_NAMES = ("clearance_all", "near_count", "near_fill", "touched_all", "move_ids", *kernel_names(STORE_TEXT))
 #: Threads of a block in the one-thread-per-item launches; never LANES, which marks a cooperative launch.
 THREADS_PER_BLOCK = 128
 #: NVVM's optimisation of the kernels (numba-cuda's ``opt``; Numba's default is on). Off, a fresh H100's
@@ -316,7 +96,7 @@ def kernels_text(source: str, simulator: bool = False) -> str:
     ``source`` is given, with the cooperative chain (:func:`~ndpack.backends.numba_cuda_lanes.lanes_text`;
     its lane primitives through shared memory for Numba's CUDA ``simulator``)."""
     cooperative = lanes_text(source + "\n\n" + KERNELS, simulator=simulator)
-    return KERNELS + cooperative + ENTRIES + STORE_ENTRIES
+    return KERNELS + cooperative + ENTRIES + STORE_KERNELS + MOVE_ENTRY
 
 
 class NumbaCudaBackend(Backend):

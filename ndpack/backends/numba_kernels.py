@@ -288,24 +288,6 @@ def near_one(b, lower, upper, reach, centers, radii, out, width):
     return found
 
 
-def centre_gap(b, s, lower, upper, centers, radii):
-    """Gap between sphere ``s`` and the centre of box ``b``."""
-    length2 = 0.0
-    for k in range(D):
-        t = 0.5 * (lower[b, k] + upper[b, k]) - centers[s, k]
-        length2 += t * t
-    return math.sqrt(length2) - radii[s]
-
-
-def box_gap(b, s, lower, upper, centers, radii):
-    """Gap between sphere ``s`` and box ``b`` (negative when they overlap)."""
-    outside2 = 0.0
-    for k in range(D):
-        t = max(lower[b, k] - centers[s, k], centers[s, k] - upper[b, k], 0.0)
-        outside2 += t * t
-    return math.sqrt(outside2) - radii[s]
-
-
 def touched_one(i, points, clearance, centers, radii, out):
     out[i] = touches(i, points, clearance, centers, radii)
 
@@ -339,16 +321,8 @@ def touches(i, points, clearance, centers, radii):
 #: side 4r has room for about 200 spheres of radius r/2 (its volume over theirs); 2, 2.5, 3.5 and 8
 #: were slower.
 INDEX_FACTOR = 3.0
-
-
-def index_level(r, top, levels):
-    """The finest level whose cells are at least ``INDEX_FACTOR`` times ``r``."""
-    level = 0
-    side = top
-    while level < levels - 1 and 0.5 * side >= INDEX_FACTOR * r:
-        side = 0.5 * side
-        level += 1
-    return level
+#: Cells a query's window is widened by (see ndpack.backends.index_kernels): none in float64.
+INDEX_SLACK = 0.0
 
 
 def index_bucket(level, cell, mask):
@@ -378,125 +352,3 @@ def index_insert(s, centers, radii, origin, top, heads, nxt, level_of, level_hea
     level_count[level] += 1
     level_rmax[level] = max(level_rmax[level], radii[s])
 
-
-def index_cell_far(b, lower, upper, cell, origin, side, bound, half, counting, rmax, margin):
-    """Whether no sphere of radius up to ``rmax`` centred in ``cell`` can answer box ``b``'s query:
-    the cell lies farther than ``bound + rmax`` from the box (``counting`` 1, the box's gap), or
-    than ``bound - half + rmax`` from its centre (0, the centre's gap), with ``margin`` more for
-    the rounding that put a centre near a face in this cell. The window's corners are most of its
-    cells from 4-D up (a ball fills 16% of its cube in 5-D), so skipping them before the hash
-    spares most of a query there."""
-    reach = (bound + rmax if counting == 1 else bound - half + rmax) + margin
-    if reach < 0.0:
-        return True
-    length2 = 0.0
-    for k in range(D):
-        start = origin[k] + cell[k] * side
-        if counting == 1:
-            t = max(start - upper[b, k], lower[b, k] - (start + side), 0.0)
-        else:
-            middle = 0.5 * (lower[b, k] + upper[b, k])
-            t = max(start - middle, middle - (start + side), 0.0)
-        length2 += t * t
-    return length2 > reach * reach
-
-
-def index_near(b, lower, upper, bound, counting, centers, radii, origin, top, heads, nxt, level_of, level_head,
-               level_next, level_count, level_rmax, out, row, width):
-    """The spheres near box ``b`` (``lower[b]``, ``upper[b]``), found through the index.
-
-    ``counting`` 0: returns ``bound`` tightened by every sphere within it of the box (the upper
-    bound of the clearance in the box: a sphere's gap from the box centre plus half a diagonal);
-    with ``width`` > 0, ``out[row, 0]`` is the sphere that tightened it most (the first of equals),
-    -1 if none did.
-    ``counting`` 1: counts the spheres that come within ``bound`` of the box, and writes the
-    first ``width`` of them into ``out[row]``. Both visit the cells of each level within ``bound``
-    (plus the level's largest radius) of the box, or the level's list where that is shorter;
-    ``counting`` 0 with the bound as tightened by the coarser levels. Returns ``(bound, count)``.
-    """
-    half2 = 0.0
-    for k in range(D):
-        half2 += 0.25 * (upper[b, k] - lower[b, k]) ** 2
-    half = math.sqrt(half2)
-    reach = bound
-    found = 0
-    low = point()
-    high = point()
-    cell = point()
-    mask = heads.shape[0] - 1
-    nearest = -1
-    for level in range(level_head.shape[0]):
-        if level_count[level] == 0:
-            continue
-        if counting == 0:  # a sphere tightens the bound only within it: look no farther than that
-            reach = bound
-        side = top * 0.5 ** level
-        cells = 1.0
-        empty = False
-        for k in range(D):
-            low[k] = math.floor((lower[b, k] - reach - level_rmax[level] - origin[k]) / side)
-            high[k] = math.floor((upper[b, k] + reach + level_rmax[level] - origin[k]) / side)
-            cells *= high[k] - low[k] + 1.0
-            # A bound below minus the level's largest radius (a cell inside a sphere) turns the
-            # window inside out: no sphere of the level is that near. Walked, its cell count,
-            # negative, sent the odometer over the other axes' ranges (1e9 cells: a hang).
-            empty = empty or high[k] < low[k]
-        if empty:
-            continue
-        listed = cells > level_count[level]
-        # Rounding may have put a centre a millionth of a cell, or a few units in the last place
-        # of its coordinates, across a face: a cell is skipped only beyond that much more, on
-        # every axis (tiny cells far from the origin included).
-        extent = 0.0
-        for k in range(D):
-            extent = max(extent, abs(origin[k]) + max(abs(low[k]), abs(high[k] + 1.0)) * side)
-        margin = math.sqrt(D) * (1e-6 * side + 1e-15 * extent)
-        s = level_head[level] if listed else -1
-        if not listed:
-            for k in range(D):
-                cell[k] = low[k]
-            cell[0] -= 1.0  # the odometer's first turn lands on the window's first cell
-        while True:
-            if s < 0:
-                if listed:
-                    break
-                k = 0  # the next cell, like an odometer
-                while k < D:
-                    cell[k] += 1.0
-                    if cell[k] <= high[k]:
-                        break
-                    cell[k] = low[k]
-                    k += 1
-                if k == D:
-                    break
-                if index_cell_far(b, lower, upper, cell, origin, side, bound, half, counting, level_rmax[level],
-                                  margin):
-                    continue
-                s = heads[index_bucket(level, cell, mask)]
-                continue
-            if s >= radii.shape[0] or s >= nxt.shape[0] or s >= level_next.shape[0]:
-                # Never on a sound index. Guarding the walk also keeps numba-cuda from an illegal
-                # address it met without it (docs/benchmarks.md, issue 5's third measurement);
-                # NaN tells the host.
-                return math.nan, found
-            mine = listed
-            if not listed and level_of[s] == level:  # skip other cells' spheres in this bucket
-                mine = True
-                for k in range(D):
-                    if math.floor((centers[s, k] - origin[k]) / side) != cell[k]:
-                        mine = False
-                        break
-            if mine:
-                if counting == 0:
-                    gap = centre_gap(b, s, lower, upper, centers, radii) + half
-                    if gap < bound or (gap == bound and s < nearest):
-                        bound = gap
-                        nearest = s
-                elif box_gap(b, s, lower, upper, centers, radii) <= bound:
-                    if found < width:
-                        out[row, found] = s
-                    found += 1
-            s = level_next[s] if listed else nxt[s]
-    if counting == 0 and width > 0:
-        out[row, 0] = nearest
-    return bound, found

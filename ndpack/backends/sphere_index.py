@@ -11,7 +11,8 @@ the box, not by the packing's size.
 
 Buckets are singly linked lists threaded through the sphere ids (``heads`` per bucket, ``next``
 per sphere), so inserting a sphere is O(1) and spheres are never moved. The kernels are the
-per-point functions ``index_*`` in :mod:`ndpack.backends.numba_kernels`. The host builds the
+functions ``index_*`` of :mod:`ndpack.backends.index_kernels` (written once, printed for each
+compiled backend) and the store's :mod:`ndpack.backends.store_kernels`. The host builds the
 index of the CPU backends (:class:`SphereIndex`); a GPU builds its own (:class:`DeviceIndex`).
 
 SciPy's k-d tree answers the same questions, but it cannot be called from inside a Numba (or

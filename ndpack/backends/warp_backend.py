@@ -1,20 +1,21 @@
 """The NVIDIA Warp backend: one Warp thread per prototype, on ``cpu`` or ``cuda:N``.
 
-The tape interpreter of a dimension (:mod:`ndpack.kernels.tape`) is printed in Warp's dialect
-and written, with the kernels of :mod:`ndpack.backends.warp_kernels`, into one generated module
-(see :func:`ndpack.kernels.compile.warp_module`); Warp compiles it once per machine, for every
-shape of built-ins, and keeps the binary. A shape is its numbers, copied to the device once. The inserted spheres
-live on the device (:class:`~ndpack.backends.device_spheres.DeviceSpheres`), and during a
-packing so do the prototypes (:class:`~ndpack.backends.prototypes.DevicePrototypes`, through
-:class:`_WarpDevice`). On a GPU, a launch that moves few prototypes in a mesh (or outline) gives
-each a block of 32 threads that walk its tree together, from a second module
-(:mod:`ndpack.backends.warp_lanes`; the backend's ``cooperative_most`` and
-``cooperative_converge_most``, 0 for never).
+The tape interpreter of a dimension (:mod:`ndpack.kernels.tape`) is printed in Warp's dialect and
+written, with the kernels of :mod:`ndpack.backends.warp_kernels` and those written once for every
+compiled backend (:mod:`ndpack.backends.index_kernels`, :mod:`ndpack.backends.store_kernels`), into
+one generated module (see :func:`ndpack.kernels.compile.warp_module`); Warp compiles it once per
+machine, for every shape of built-ins, and keeps the binary. A shape is its numbers, copied to the
+device once. The inserted spheres live on the device
+(:class:`~ndpack.backends.device_spheres.DeviceSpheres`), and during a packing so do the prototypes
+(:class:`~ndpack.backends.prototypes.DevicePrototypes`, through :class:`_WarpDevice`). On a GPU, a
+launch that moves few prototypes in a mesh (or outline) gives each a block of 32 threads that walk
+its tree together, from a second module (:mod:`ndpack.backends.warp_lanes`; the backend's
+``cooperative_most`` and ``cooperative_converge_most``, 0 for never).
 
-Precision: float64 by default. ``precision="float32"`` runs the kernels in float32 (faster on
-GPUs without full float64 rate); clearances are then accurate to about 1e-7 of the shape's size,
-so the driver shrinks radii by :attr:`WarpBackend.margin` of the size, and the packing is still
-verified (and repaired) in float64 before it is returned.
+Precision: float64 by default. ``precision="float32"`` runs the kernels in float32 (faster on GPUs
+without full float64 rate); clearances are then accurate to about 1e-7 of the shape's size, so the
+driver shrinks radii by :attr:`WarpBackend.margin` of the size, and the packing is still verified
+(and repaired) in float64 before it is returned.
 """
 
 from __future__ import annotations
@@ -27,13 +28,18 @@ import numpy as np
 from ..errors import BackendError
 from ..kernels.compile import warp_module
 from ..kernels.compiled import compiled_program
+from ..kernels.portable import render
 from ..kernels.tape import interpreter
 from .base import Backend, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
 from .prototypes import SPREAD_MAX, DevicePrototypes, no_wall
 from .warp_lanes import CONVERGE_MOST, COOPERATIVE_MOST, LANES, SHARE_EVERY, functions_only, has_walk, lanes_text
 
-KERNELS = Path(__file__).with_name("warp_kernels.py").read_text()
+#: Warp's own kernels, then the sphere index's queries and the store's kernels, written once for every
+#: compiled backend (index_kernels.py, store_kernels.py).
+KERNELS = "\n\n".join([Path(__file__).with_name("warp_kernels.py").read_text(),
+                       *(render(Path(__file__).with_name(name).read_text(), "warp")
+                         for name in ("index_kernels.py", "store_kernels.py"))])
 #: Central-difference step as a fraction of the shape's scale, per precision.
 FD_STEP = {"float64": 1e-6, "float32": 1e-3}
 #: Radius safety margin as a fraction of the shape's scale, per precision.
