@@ -1,4 +1,4 @@
-"""The sphere index's queries, written once for every compiled backend.
+"""The spheres near a box: the sphere index's queries (and the plain one), written once for every compiled backend.
 
 This file is read as text, not imported: :func:`ndpack.kernels.portable.render` prints it for
 Numba (the CPU backend and numba-cuda: :mod:`ndpack.backends.numba_common`) and for Warp
@@ -18,22 +18,54 @@ no portable form. The argument types are those of :data:`ndpack.kernels.portable
 # ruff: noqa: F821  (D, point, INDEX_FACTOR, INDEX_SLACK and index_bucket exist where this text runs)
 
 
-def centre_gap(b: "int", s: "int", lower: "points", upper: "points", centers: "points", radii: "floats"):
-    """Gap between sphere ``s`` and the centre of box ``b``."""
+def point_gap(x: "point", s: "int", centers: "points", radii: "floats"):
+    """Gap between sphere ``s`` and the point ``x`` (a box's centre)."""
     length2 = 0.0
     for k in range(D):
-        t = 0.5 * (lower[b, k] + upper[b, k]) - centers[s, k]
+        t = x[k] - centers[s, k]
         length2 += t * t
     return math.sqrt(length2) - radii[s]
 
 
-def box_gap(b: "int", s: "int", lower: "points", upper: "points", centers: "points", radii: "floats"):
-    """Gap between sphere ``s`` and box ``b`` (negative when they overlap)."""
+def box_gap(lo: "point", hi: "point", s: "int", centers: "points", radii: "floats"):
+    """Gap between sphere ``s`` and the box ``lo``-``hi`` (negative when they overlap)."""
     outside2 = 0.0
     for k in range(D):
-        t = max(lower[b, k] - centers[s, k], centers[s, k] - upper[b, k], 0.0)
+        t = max(lo[k] - centers[s, k], centers[s, k] - hi[k], 0.0)
         outside2 += t * t
     return math.sqrt(outside2) - radii[s]
+
+
+def box_of(b: "int", lower: "points", upper: "points", lo: "point", hi: "point", middle: "point"):
+    """Box ``b``'s corners and centre into ``lo``, ``hi`` and ``middle``, and half its diagonal: a
+    query reads them once (from registers on a GPU), not once per cell or sphere."""
+    half2 = 0.0
+    for k in range(D):
+        lo[k] = lower[b, k]
+        hi[k] = upper[b, k]
+        middle[k] = 0.5 * (lo[k] + hi[k])
+        half2 += 0.25 * ((hi[k] - lo[k]) * (hi[k] - lo[k]))
+    return math.sqrt(half2)
+
+
+def near_one(b: "int", lower: "points", upper: "points", reach: "floats", centers: "points", radii: "floats",
+             out: "int_table", width: "int"):
+    """Spheres whose surface comes within the reach of box ``b``, without the index (every sphere
+    looked at): how many, the first ``width`` in ``out``."""
+    lo = point()
+    hi = point()
+    middle = point()
+    half = box_of(b, lower, upper, lo, hi, middle)
+    bound = reach[b]
+    for s in range(radii.shape[0]):  # a tighter reach from the box centre's clearance
+        bound = min(bound, point_gap(middle, s, centers, radii) + half)
+    found = 0
+    for s in range(radii.shape[0]):
+        if box_gap(lo, hi, s, centers, radii) <= bound:
+            if found < width:
+                out[b, found] = s
+            found += 1
+    return found
 
 
 def index_level(r: "float", top: "float", levels: "int"):
@@ -46,14 +78,14 @@ def index_level(r: "float", top: "float", levels: "int"):
     return level
 
 
-def index_cell_far(b: "int", lower: "points", upper: "points", cell: "point", origin: "floats", side: "float",
+def index_cell_far(lo: "point", hi: "point", middle: "point", cell: "point", origin: "floats", side: "float",
                    bound: "float", half: "float", counting: "int", rmax: "float", margin: "float"):
-    """Whether no sphere of radius up to ``rmax`` centred in ``cell`` can answer box ``b``'s query:
-    the cell lies farther than ``bound + rmax`` from the box (``counting`` 1, the box's gap), or
-    than ``bound - half + rmax`` from its centre (0, the centre's gap), with ``margin`` more for
-    the rounding that put a centre near a face in this cell. The window's corners are most of its
-    cells from 4-D up (a ball fills 16% of its cube in 5-D), so skipping them before the hash
-    spares most of a query there."""
+    """Whether no sphere of radius up to ``rmax`` centred in ``cell`` can answer the query of the box
+    ``lo``-``hi`` (centre ``middle``): the cell lies farther than ``bound + rmax`` from the box
+    (``counting`` 1, the box's gap), or than ``bound - half + rmax`` from its centre (0, the centre's
+    gap), with ``margin`` more for the rounding that put a centre near a face in this cell. The
+    window's corners are most of its cells from 4-D up (a ball fills 16% of its cube in 5-D), so
+    skipping them before the hash spares most of a query there."""
     reach = (bound + rmax if counting == 1 else bound - half + rmax) + margin
     if reach < 0.0:
         return True
@@ -62,10 +94,9 @@ def index_cell_far(b: "int", lower: "points", upper: "points", cell: "point", or
         start = origin[k] + cell[k] * side
         t = 0.0
         if counting == 1:
-            t = max(start - upper[b, k], lower[b, k] - (start + side), 0.0)
+            t = max(start - hi[k], lo[k] - (start + side), 0.0)
         else:
-            middle = 0.5 * (lower[b, k] + upper[b, k])
-            t = max(start - middle, middle - (start + side), 0.0)
+            t = max(start - middle[k], middle[k] - (start + side), 0.0)
         length2 += t * t
     return length2 > reach * reach
 
@@ -85,10 +116,10 @@ def index_near(b: "int", lower: "points", upper: "points", bound: "float", count
     (plus the level's largest radius) of the box, or the level's list where that is shorter;
     ``counting`` 0 with the bound as tightened by the coarser levels. Returns ``(bound, count)``.
     """
-    half2 = 0.0
-    for k in range(D):
-        half2 += 0.25 * ((upper[b, k] - lower[b, k]) * (upper[b, k] - lower[b, k]))
-    half = math.sqrt(half2)
+    lo = point()
+    hi = point()
+    middle = point()
+    half = box_of(b, lower, upper, lo, hi, middle)
     slack = float(INDEX_SLACK)
     reach = bound
     found = 0
@@ -98,7 +129,10 @@ def index_near(b: "int", lower: "points", upper: "points", bound: "float", count
     mask = heads.shape[0] - 1
     nearest = -1
     side = top
+    corrupt = 0
     for level in range(level_head.shape[0]):
+        if corrupt == 1:
+            break
         if level > 0:
             side = side * 0.5  # a power of two: top * 0.5**level exactly
         if level_count[level] == 0:
@@ -108,8 +142,8 @@ def index_near(b: "int", lower: "points", upper: "points", bound: "float", count
         cells = 1.0
         empty = 0
         for k in range(D):
-            low[k] = math.floor((lower[b, k] - reach - level_rmax[level] - origin[k]) / side) - slack
-            high[k] = math.floor((upper[b, k] + reach + level_rmax[level] - origin[k]) / side) + slack
+            low[k] = math.floor((lo[k] - reach - level_rmax[level] - origin[k]) / side) - slack
+            high[k] = math.floor((hi[k] + reach + level_rmax[level] - origin[k]) / side) + slack
             cells *= high[k] - low[k] + 1.0
             # A bound below minus the level's largest radius (a cell inside a sphere) turns the
             # window inside out: no sphere of the level is that near. Walked, its cell count,
@@ -146,7 +180,7 @@ def index_near(b: "int", lower: "points", upper: "points", bound: "float", count
                     k += 1
                 if k == D:
                     break
-                if index_cell_far(b, lower, upper, cell, origin, side, bound, half, counting, level_rmax[level],
+                if index_cell_far(lo, hi, middle, cell, origin, side, bound, half, counting, level_rmax[level],
                                   margin):
                     continue
                 s = heads[index_bucket(level, cell, mask)]
@@ -154,8 +188,10 @@ def index_near(b: "int", lower: "points", upper: "points", bound: "float", count
             if s >= radii.shape[0] or s >= nxt.shape[0] or s >= level_next.shape[0]:
                 # Never on a sound index. Guarding the walk also keeps numba-cuda from an illegal
                 # address it met without it (docs/benchmarks.md, issue 5's third measurement);
-                # NaN tells the host.
-                return math.nan, found
+                # NaN tells the host. Not a return here: one inside the loops made Warp's index
+                # kernels 3x slower on an H100 (bench/gpu_issue48_step10.sh guard).
+                corrupt = 1
+                break
             mine = listed
             if not listed and level_of[s] == level:  # skip other cells' spheres in this bucket
                 mine = True
@@ -165,11 +201,11 @@ def index_near(b: "int", lower: "points", upper: "points", bound: "float", count
                             mine = False
             if mine:
                 if counting == 0:
-                    gap = centre_gap(b, s, lower, upper, centers, radii) + half
+                    gap = point_gap(middle, s, centers, radii) + half
                     if gap < bound or (gap == bound and s < nearest):
                         bound = gap
                         nearest = s
-                elif box_gap(b, s, lower, upper, centers, radii) <= bound:
+                elif box_gap(lo, hi, s, centers, radii) <= bound:
                     if found < width:
                         out[row, found] = s
                     found += 1
@@ -177,6 +213,8 @@ def index_near(b: "int", lower: "points", upper: "points", bound: "float", count
                 s = level_next[s]
             else:
                 s = nxt[s]
+    if corrupt == 1:
+        return math.nan, found
     if counting == 0 and width > 0:
         out[row, 0] = nearest
     return bound, found

@@ -17,11 +17,14 @@ from pathlib import Path
 from ..kernels.compile import numba_namespace
 from ..kernels.portable import render
 from ..kernels.tape import interpreter
+from .kernel_texts import INDEX, MOVE, portable_text
 
-#: The per-point functions, as text (numba_kernels.py), and the sphere index's queries, written once for
-#: every compiled backend (index_kernels.py).
+
+#: The per-point functions, as text: Numba's own (numba_kernels.py), then the move and the sphere index's
+#: queries, written once for every compiled backend (move_kernels.py, index_kernels.py).
 KERNELS = (Path(__file__).with_name("numba_kernels.py").read_text() + "\n\n"
-           + render(Path(__file__).with_name("index_kernels.py").read_text(), "numba"))
+           + render(portable_text(MOVE, INDEX), "numba"))
+
 
 #: Entry points: a parallel loop over prototypes (or boxes) calling the per-point functions.
 ENTRIES = '''

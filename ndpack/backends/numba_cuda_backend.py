@@ -18,7 +18,6 @@ Without a GPU, set ``NUMBA_ENABLE_CUDASIM=1`` to run the same kernels in Numba's
 from __future__ import annotations
 
 import weakref
-from pathlib import Path
 
 import numpy as np
 
@@ -29,17 +28,12 @@ from ..kernels.portable import kernel_names, render
 from ..kernels.tape import interpreter
 from .base import Backend, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
+from .kernel_texts import STORE, portable_text
 from .numba_common import FD_STEP, KERNELS
 from .numba_cuda_lanes import CONVERGE_MOST, COOPERATIVE_MOST, LANES, has_walk, lanes_text, shared_bytes
 from .prototypes import SPREAD_MAX, DevicePrototypes, best_starts, no_wall
 
 ENTRIES = '''
-def clearance_all(points, prm, centers, radii, nbr, h, out, out_direction):
-    i = cuda.grid(1)
-    if i < points.shape[0]:
-        clearance_one(i, points, prm, centers, radii, nbr, h, out, out_direction)
-
-
 def near_count(lower, upper, reach, centers, radii, counts, out):
     b = cuda.grid(1)
     if b < lower.shape[0]:
@@ -50,17 +44,11 @@ def near_fill(lower, upper, reach, centers, radii, out):
     b = cuda.grid(1)
     if b < lower.shape[0]:
         near_one(b, lower, upper, reach, centers, radii, out, out.shape[1])
-
-
-def touched_all(points, clearance, centers, radii, out):
-    i = cuda.grid(1)
-    if i < points.shape[0]:
-        touched_one(i, points, clearance, centers, radii, out)
 '''
 
 # The prototype store's kernels over every prototype and by id, and the sphere index's clearing:
 # written once for both GPU backends (ndpack.backends.store_kernels), printed for numba-cuda.
-STORE_TEXT = Path(__file__).with_name("store_kernels.py").read_text()
+STORE_TEXT = portable_text(STORE)
 STORE_KERNELS = render(STORE_TEXT, "cuda")
 # The move, in numba-cuda's dialect (its cooperative walk has no Warp twin in this form).
 MOVE_ENTRY = '''
@@ -81,7 +69,7 @@ def move_ids(ids, first, first_rows, tries, stream, points, clearance, polished,
         move_one_lanes(b, lane, ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper,
                        wall, prm, centers, radii, nbr, steps, h, polish, polish_steps, polish_low, polish_from)
 '''
-ENTRY_NAMES = ("clearance_all", "near_count", "near_fill", "touched_all", "move_ids", *kernel_names(STORE_TEXT))
+ENTRY_NAMES = ("near_count", "near_fill", "move_ids", *kernel_names(STORE_TEXT))
 #: Threads of a block in the one-thread-per-item launches; never LANES, which marks a cooperative launch.
 THREADS_PER_BLOCK = 128
 #: NVVM's optimisation of the kernels (numba-cuda's ``opt``; Numba's default is on). Off, a fresh H100's

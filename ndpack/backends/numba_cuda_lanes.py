@@ -30,7 +30,7 @@ __all__ = ["CHAIN", "CONVERGE_MOST", "COOPERATIVE_MOST", "LANES", "has_walk", "l
 #: Threads of a cooperative block: one warp (the ballot's and the shuffles' mask is the whole warp).
 LANES = 32
 #: The numba functions on the way from the move to the tree walk, copied with the ``_lanes`` suffix
-#: (the program's, then ``numba_kernels``'s).
+#: (the program's, then ``move_kernels``'s, as printed for Numba).
 CHAIN = ("surface_feature", "sd_feature", "nearest_obstacle", "free_space", "converge_from", "move_one")
 
 _WALK = '''
@@ -155,9 +155,9 @@ def has_walk(text: str) -> bool:
 
 
 def lanes_text(text: str, simulator: bool = False, capacity: int = STACK_CAPACITY) -> str:
-    """The cooperative chain of a numba-cuda module whose ``text`` holds the program and
-    ``numba_kernels``: the :data:`CHAIN` functions present copied with the suffix, and where the
-    program walks a tree, the walk (its stack holding ``capacity`` nodes) and its lane primitives,
+    """The cooperative chain of a numba-cuda module whose ``text`` holds the program and the
+    kernels (``numba_common.KERNELS``): the :data:`CHAIN` functions present copied with the suffix,
+    and where the program walks a tree, the walk (its stack holding ``capacity`` nodes) and its lane primitives,
     through shared memory for the ``simulator``."""
     present = [name for name in CHAIN if f"\ndef {name}(" in "\n" + text]
     parts = ["# Cooperative moves: see ndpack.backends.numba_cuda_lanes.",

@@ -1,4 +1,4 @@
-"""The prototype store's kernels, written once for both GPU backends.
+"""The GPU backends' kernels, written once for both: the prototype store's, and the array operations'.
 
 This file is read as text, not imported: :func:`ndpack.kernels.portable.render` prints it for
 numba-cuda (:mod:`ndpack.backends.numba_cuda_backend`) and for Warp
@@ -14,7 +14,23 @@ The argument annotations are the portable types of :data:`ndpack.kernels.portabl
 kernel, one thread per item, the others device functions.
 """
 
-# ruff: noqa: F821  (D, sd, point, thread and the atomics exist where this text runs)
+# ruff: noqa: F821  (D, sd, point, thread, the atomics and the functions of move_kernels.py and
+# index_kernels.py exist where this text runs)
+
+
+def clearance_all(points: "points", prm: "floats", centers: "points", radii: "floats", nbr: "int_table", h: "float",
+                  out: "floats", out_direction: "points"):
+    """Clearance of every point into ``out``; its direction into ``out_direction`` if that has rows."""
+    i = thread()
+    if i < points.shape[0]:
+        clearance_one(i, points, prm, centers, radii, nbr, h, out, out_direction)
+
+
+def touched_all(points: "points", clearance: "floats", centers: "points", radii: "floats", out: "ints"):
+    """Per point, the sphere nearest to it if its clearance ball meets it, else -1 (``touches``)."""
+    i = thread()
+    if i < points.shape[0]:
+        out[i] = touches(i, points, clearance, centers, radii)
 
 
 def append(i: "int", points: "points", clearance: "floats", polished: "ints", counter: "ints", out_ids: "ints",

@@ -32,14 +32,14 @@ from ..kernels.portable import render
 from ..kernels.tape import interpreter
 from .base import Backend, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
+from .kernel_texts import INDEX, MOVE, STORE, portable_text
 from .prototypes import SPREAD_MAX, DevicePrototypes, no_wall
 from .warp_lanes import CONVERGE_MOST, COOPERATIVE_MOST, LANES, SHARE_EVERY, functions_only, has_walk, lanes_text
 
-#: Warp's own kernels, then the sphere index's queries and the store's kernels, written once for every
-#: compiled backend (index_kernels.py, store_kernels.py).
-KERNELS = "\n\n".join([Path(__file__).with_name("warp_kernels.py").read_text(),
-                       *(render(Path(__file__).with_name(name).read_text(), "warp")
-                         for name in ("index_kernels.py", "store_kernels.py"))])
+#: Warp's own kernels, then the move, the sphere index's queries and the store's kernels, written once for
+#: every compiled backend (move_kernels.py, index_kernels.py, store_kernels.py).
+KERNELS = (Path(__file__).with_name("warp_kernels.py").read_text() + "\n\n"
+           + render(portable_text(MOVE, INDEX, STORE), "warp"))
 #: Central-difference step as a fraction of the shape's scale, per precision.
 FD_STEP = {"float64": 1e-6, "float32": 1e-3}
 #: Radius safety margin as a fraction of the shape's scale, per precision.
@@ -202,23 +202,30 @@ class WarpBackend(Backend):
 
     def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None,
                  starts=None):
+        """The base class's converge, run by the move kernel (``move_ids``: each point its own cell and
+        neighbour row, no restarts, no polish), as numba-cuda's: one kernel (and one cooperative
+        kernel) fewer to compile. Each point starts from the best of it and ``starts`` by clearance."""
         points = self._best_of_starts(shape, points, starts, centers, radii, neighbours)
+        count = len(points)
+        if count == 0:
+            return np.zeros((0, shape.dim)), np.zeros(0)
         module, params, h = self._module(shape)
-        wall = no_wall(len(points)) if wall is None else wall
+        wall = no_wall(count) if wall is None else wall
         d_centers, d_radii, table = self._spheres_and_table(module, centers, radii, neighbours)
-        out_points = self.wp.empty(len(points), dtype=module.VecD, device=self.device)
-        out_clearance = self.wp.empty(len(points), dtype=module.F, device=self.device)
-        if len(points):
-            inputs = [self._points(module, points), self._points(module, cell_lower), self._points(module, cell_upper),
-                      self._array(wall, module.F), params, d_centers, d_radii, table, self._array(steps, module.F), h,
-                      out_points, out_clearance]
-            lanes = self._lanes_module(shape) if len(points) <= self.cooperative_converge_most else None
-            if lanes is not None:
-                self.wp.launch_tiled(lanes.converge_all_lanes, dim=[len(points)], inputs=inputs, block_dim=LANES,
-                                     device=self.device)
-            else:
-                self.wp.launch(module.converge_all, dim=len(points), device=self.device, inputs=inputs)
-        return (out_points.numpy().reshape(len(points), -1).astype(np.float64),
+        out_points = self._points(module, points)
+        out_clearance = self.wp.empty(count, dtype=module.F, device=self.device)
+        d_steps = self._array(steps, module.F)
+        polished = self.wp.empty(count, dtype=self.wp.int32, device=self.device)
+        inputs = [self._array(np.arange(count), self.wp.int32), self.wp.empty(1, dtype=module.VecD, device=self.device),
+                  0, 0, 0, out_points, out_clearance, polished, self._points(module, cell_lower),
+                  self._points(module, cell_upper), self._array(wall, module.F), params, d_centers, d_radii, table,
+                  d_steps, h, 0, 1, d_steps, self.float(np.inf), count]
+        lanes = self._lanes_module(shape) if count <= self.cooperative_converge_most else None
+        if lanes is not None:
+            self.wp.launch_tiled(lanes.move_ids_lanes, dim=[count], inputs=inputs, block_dim=LANES, device=self.device)
+        else:
+            self.wp.launch(module.move_ids, dim=count, device=self.device, inputs=inputs)
+        return (out_points.numpy().reshape(count, -1).astype(np.float64),
                 out_clearance.numpy().astype(np.float64))
 
     def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):

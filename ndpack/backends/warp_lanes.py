@@ -50,7 +50,7 @@ LANES = 32
 #: spheres of the armadillo on an H200 (bench/gpu_issue48_step3.sh lanes), with moves of at most
 #: 1,024, 4,096, 8,192 and 16,384 prototypes cooperative: 0.93, 0.80, 0.88 and 0.88 s; never 1.28 s.
 COOPERATIVE_MOST = 4096
-#: The same for the converge of a packing's set-up (:data:`CONVERGE_KERNEL`), one launch over every
+#: The same for the converge of a packing's set-up (a :data:`MOVE_KERNEL` launch), one launch over every
 #: cell: at 100,000 spheres of the armadillo 5,018 cells, whose slowest walked 10x the mean's nodes
 #: (bench/work_model.py), so the longest chain outweighs a second wave of blocks: the set-up took
 #: 0.06 s against 0.24 s (H200, bench/gpu_issue48_step4.sh lanes).
@@ -165,22 +165,6 @@ def functions_only(kernels: str) -> str:
     function only where a kernel calls it)."""
     return re.sub(r"^@wp\.kernel\n.*?(?=^\S)", "", kernels + "\n#", flags=re.M | re.S)
 
-CONVERGE_KERNEL = '''
-@wp.kernel
-def converge_all_lanes(points: wp.array(dtype=VecD), lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD),
-                       wall: wp.array(dtype=F), prm: wp.array(dtype=F), centers: wp.array(dtype=VecD),
-                       radii: wp.array(dtype=F), nbr: wp.array2d(dtype=wp.int32), steps: wp.array(dtype=F), h: F,
-                       out_points: wp.array(dtype=VecD), out_clearance: wp.array(dtype=F)):
-    """converge_all with a block of lanes per point (a tiled launch), walking together."""
-    i, lane = wp.tid()
-    best, best_clearance = converge_from_lanes(points[i], lower[i], upper[i], wall[i], prm, centers, radii, nbr, i,
-                                               steps, h)
-    if lane == 0:
-        out_points[i] = best
-        out_clearance[i] = best_clearance
-'''
-
-
 def has_walk(text: str) -> bool:
     """Whether a module's text walks a mesh's (or outline's) tree in the kernel language."""
     return "def nearest_element(" in text and "wp.mesh_query_point" not in text
@@ -204,6 +188,6 @@ def chain_copies(text: str, chain, decorator: str = "@wp.func\n") -> list[str]:
 def lanes_text(text: str, capacity: int = STACK_CAPACITY, share: int = SHARE_EVERY) -> str:
     """The cooperative move of a module whose ``text`` (program and kernels) walks a tree
     (:func:`has_walk`): the :data:`CHAIN` copied with the suffix, the walk (:func:`nearest_lanes`),
-    :data:`MOVE_KERNEL` and :data:`CONVERGE_KERNEL`."""
+    and :data:`MOVE_KERNEL`."""
     return "\n\n".join(["# Cooperative moves: see ndpack.backends.warp_lanes.", nearest_lanes(capacity, share),
-                        *chain_copies(text, CHAIN), MOVE_KERNEL, CONVERGE_KERNEL])
+                        *chain_copies(text, CHAIN), MOVE_KERNEL])

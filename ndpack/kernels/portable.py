@@ -1,25 +1,33 @@
-"""Device kernels written once, printed for numba-cuda and for Warp.
+"""Device kernels written once, printed for Numba (CPU and CUDA) and for Warp.
 
-The GPU backends' kernels that do not depend on how a backend walks a mesh (the prototype
-store's selections, splits and tables: :mod:`ndpack.backends.store_kernels`) are written once, in
-the numba dialect with typed arguments, and printed here for each backend:
+The compiled backends' own kernels (the move and its converge, the sphere index's queries, the
+prototype store's selections, splits and tables: :mod:`ndpack.backends.move_kernels`,
+:mod:`ndpack.backends.index_kernels`, :mod:`ndpack.backends.store_kernels`) are written once, in the
+numba dialect with typed arguments, and printed here for each backend:
 
 - every argument is annotated with a string of :data:`ARGUMENT_TYPES` (Warp needs the types;
-  numba-cuda infers them, so its print drops the annotations);
+  Numba infers them, so its print drops the annotations);
 - a function that calls ``thread()`` is a kernel (``cuda.grid(1)``, ``wp.tid()``): one thread per
   item, which checks its index against the item count itself (numba-cuda rounds a launch up to
   whole blocks); the others are device functions;
 - ``atomic_add``, ``atomic_max`` and ``atomic_exch`` (array, index, value) are the backends'
-  atomics; ``point()`` is a local point of length ``D``; ``sd(p, prm)`` and ``D`` come from the
-  module the text is printed into.
+  atomics; ``u64(x)`` a 64-bit unsigned int (for hashes); ``point()`` a local point of length
+  ``D``; ``sd(p, prm)`` (and the program's other functions) and ``D`` come from the module the
+  text is printed into.
+
+A point is an array in Numba and a value (``VecD``) in Warp, which keeps it in registers. A
+function that writes a point it was given (directly or through a function it passes it to)
+therefore returns it in Warp, after its own results, and every call of it assigns the point
+back: ``c = f(x, g)`` is printed ``c, x, g = f(x, g)``. So that this means what Numba means, a
+point is never assigned whole (``q = p``: an alias in Numba, a copy in Warp), a function that
+writes points is called as a statement with plain names for them (``c = f(x, g)``, ``f(x, g)``),
+never the same point twice, and a call's results are unpacked into names, never indexed.
 
 For Warp, which does not promote ints to floats, float constants are cast to the module's float
 ``F``, ``float(x)`` becomes ``F(x)``, ``math.f`` ``wp.f``, ``min``/``max``/``abs`` Warp's, ``a if
-c else b`` ``wp.where(c, a, b)``, and ``x[i, k]`` of a ``points`` array (Warp's array of vectors)
-``x[i][k]``. What Warp cannot do is refused here with the function and line named: a local
-point is a value in Warp and an array in numba, so a point is never assigned whole to a name nor
-written in a function it was passed to; a call's result is unpacked into names, never indexed; a
-kernel returns nothing.
+c else b`` ``wp.where(c, a, b)``, ``x[i, k]`` of a ``points`` array (Warp's array of vectors)
+``x[i][k]``, and a name given an int constant ``int(...)`` (a variable, which a loop may change).
+What Warp cannot do is refused here with the function and line named.
 """
 
 from __future__ import annotations
@@ -33,6 +41,8 @@ from ..errors import KernelError
 #: The portable argument types, and Warp's (numba-cuda takes the arrays the host gives).
 ARGUMENT_TYPES = {
     "int": "int",
+    "bool": "bool",
+    "u64": "wp.uint64",
     "float": "F",
     "ints": "wp.array(dtype=wp.int32)",
     "floats": "wp.array(dtype=F)",
@@ -88,17 +98,74 @@ def kernel_names(text: str) -> list[str]:
     return [function.name for function in _parse(text) if is_kernel(function)]
 
 
-def _check(function: ast.FunctionDef, types: dict[str, str]) -> None:
-    """Refuse what would mean one thing in numba and another in Warp (see the module's notes)."""
-    points = {name for name, kind in types.items() if kind == "point"}
-    kernel = is_kernel(function)
+def _points(function: ast.FunctionDef) -> set[str]:
+    """The names of ``function``'s points: its arguments typed ``point`` and the locals made by ``point()``."""
+    names = {arg.arg for arg in function.args.args
+             if isinstance(arg.annotation, ast.Constant) and arg.annotation.value == "point"}
     for node in ast.walk(function):
+        if isinstance(node, ast.Assign) and isinstance(node.value, ast.Call) and _name(node.value.func) == "point":
+            names.update(target.id for target in node.targets if isinstance(target, ast.Name))
+    return names
+
+
+def _arity(function: ast.FunctionDef) -> int:
+    """How many values ``function`` returns (0: none)."""
+    for node in ast.walk(function):
+        if isinstance(node, ast.Return) and node.value is not None:
+            return len(node.value.elts) if isinstance(node.value, ast.Tuple) else 1
+    return 0
+
+
+def written_points(functions: list[ast.FunctionDef]) -> dict[str, list[int]]:
+    """Per function, the positions of the point arguments it writes: directly (``p[k] = ...``) or
+    by passing them to a function that writes them (to a fixed point)."""
+    by_name = {function.name: function for function in functions}
+    writes: dict[str, set[int]] = {name: set() for name in by_name}
+    changed = True
+    while changed:
+        changed = False
+        for function in functions:
+            names = [arg.arg for arg in function.args.args]
+            written = set()
+            for node in ast.walk(function):
+                if isinstance(node, ast.Assign | ast.AugAssign):
+                    for target in (node.targets if isinstance(node, ast.Assign) else [node.target]):
+                        if isinstance(target, ast.Subscript) and _name(target.value) in names:
+                            written.add(_name(target.value))
+                elif isinstance(node, ast.Call) and _name(node.func) in writes:
+                    written.update(_name(node.args[k]) for k in writes[_name(node.func)] if k < len(node.args))
+            positions = {k for k, name in enumerate(names) if name in written and name in _points(function)}
+            if positions - writes[function.name]:
+                writes[function.name] |= positions
+                changed = True
+    return {name: sorted(positions) for name, positions in writes.items()}
+
+
+def _check(function: ast.FunctionDef, types: dict[str, str], writes: dict[str, list[int]]) -> None:
+    """Refuse what would mean one thing in numba and another in Warp (see the module's notes)."""
+    points = _points(function)
+    kernel = is_kernel(function)
+    statements = {id(node.value) for node in ast.walk(function) if isinstance(node, ast.Expr | ast.Assign)}
+    for node in ast.walk(function):
+        if isinstance(node, ast.Call) and writes.get(_name(node.func)):
+            passed = [node.args[k] for k in writes[_name(node.func)] if k < len(node.args)]
+            if id(node) not in statements:
+                _fail(function, node, f"{_name(node.func)}() writes points it is given: call it as a statement "
+                      "(c = f(...) or f(...)), not inside an expression")
+            if not all(isinstance(arg, ast.Name) and arg.id in points for arg in passed):
+                _fail(function, node, f"{_name(node.func)}() writes points it is given: pass them as names of "
+                      "points (made by point() or passed in)")
+            if len({arg.id for arg in passed}) < len(passed):
+                _fail(function, node, f"{_name(node.func)}() is given one point twice where it writes them")
         if isinstance(node, ast.Assign | ast.AugAssign):
             targets = node.targets if isinstance(node, ast.Assign) else [node.target]
             for target in targets:
-                if isinstance(target, ast.Subscript) and _name(target.value) in points:
-                    _fail(function, node, f"{_name(target.value)!r} is a point passed in: Warp passes it by "
-                          "value, so a write would not reach the caller; return the values instead")
+                names = target.elts if isinstance(target, ast.Tuple) else [target]
+                creating = isinstance(node, ast.Assign) and isinstance(node.value, ast.Call) and _name(
+                    node.value.func) == "point"
+                if any(_name(name) in points for name in names) and not creating:
+                    _fail(function, node, "a point is assigned whole (an alias in numba, a copy in Warp): "
+                          "copy it element by element")
                 unpacked = (isinstance(target, ast.Tuple) and isinstance(node.value, ast.Call)
                             and all(isinstance(name, ast.Name) for name in target.elts))
                 if not (isinstance(target, ast.Name | ast.Subscript) or unpacked):
@@ -106,8 +173,8 @@ def _check(function: ast.FunctionDef, types: dict[str, str]) -> None:
                           "results into names")
             value = getattr(node, "value", None)
             if isinstance(node, ast.Assign) and isinstance(value, ast.Name) and value.id in points:
-                _fail(function, node, f"a point ({value.id!r}) is copied element by element (Warp copies a "
-                      "point assigned whole, numba shares it)")
+                _fail(function, node, f"a point ({value.id!r}) is assigned whole (an alias in numba, a copy in "
+                      "Warp): copy it element by element")
         elif isinstance(node, ast.Subscript) and isinstance(node.value, ast.Call):
             _fail(function, node, "unpack a call's results into names (a, b = f(...)) instead of indexing them")
         elif isinstance(node, ast.Return) and kernel and node.value is not None:
@@ -115,14 +182,6 @@ def _check(function: ast.FunctionDef, types: dict[str, str]) -> None:
         elif isinstance(node, ast.Attribute) and _name(node.value) in ("cuda", "wp", "np", "numba"):
             _fail(function, node, f"{ast.unparse(node)} is a backend's own: use the portable names "
                   f"(thread(), {', '.join(ATOMICS)})")
-    # A local point assigned whole to another name (an alias in numba, a copy in Warp).
-    made = {target.id for node in ast.walk(function) if isinstance(node, ast.Assign)
-            for target in node.targets
-            if isinstance(target, ast.Name) and isinstance(node.value, ast.Call) and _name(node.value.func) == "point"}
-    for node in ast.walk(function):
-        if isinstance(node, ast.Assign) and isinstance(node.value, ast.Name) and node.value.id in made:
-            _fail(function, node, f"a point ({node.value.id!r}) is copied element by element (Warp copies a "
-                  "point assigned whole, numba shares it)")
 
 
 class _ToCuda(ast.NodeTransformer):
@@ -133,12 +192,42 @@ class _ToCuda(ast.NodeTransformer):
             return ast.parse("cuda.grid(1)", mode="eval").body
         if name in ATOMICS:
             node.func = ast.parse(ATOMICS[name][0], mode="eval").body
+        elif name == "u64":
+            node.func = ast.parse("np.uint64", mode="eval").body
         return node
 
 
 class _ToWarp(ast.NodeTransformer):
-    def __init__(self, types: dict[str, str]):
-        self.types = types
+    def __init__(self, types: dict[str, str], writes: dict[str, list[int]], arity: dict[str, int],
+                 returned: list[str]):
+        self.types, self.writes, self.arity = types, writes, arity
+        self.returned = returned  # the points this function writes, returned after its results
+        self.spare = 0
+
+    def _written_back(self, call: ast.Call) -> list[ast.expr]:
+        """The names of the points ``call`` writes (assigned back in Warp)."""
+        return [ast.Name(_name(call.args[k]), ast.Store()) for k in self.writes.get(_name(call.func), ())
+                if k < len(call.args)]
+
+    def _unused(self) -> ast.Name:
+        self.spare += 1
+        return ast.Name(f"unused_{self.spare}", ast.Store())
+
+    def visit_Expr(self, node):
+        if isinstance(node.value, ast.Call) and self.writes.get(_name(node.value.func)):
+            results = [self._unused() for _ in range(self.arity.get(_name(node.value.func), 0))]
+            return self.visit(ast.copy_location(ast.Assign(targets=[ast.Tuple(results, ast.Store())],
+                                                           value=node.value), node))
+        return self.generic_visit(node)
+
+    def visit_Return(self, node):
+        self.generic_visit(node)
+        if not self.returned:
+            return node
+        values = [] if node.value is None else (node.value.elts if isinstance(node.value, ast.Tuple) else [node.value])
+        values = [*values, *(ast.Name(name, ast.Load()) for name in self.returned)]
+        node.value = values[0] if len(values) == 1 else ast.Tuple(values, ast.Load())
+        return node
 
     @staticmethod
     def _expression(text: str) -> ast.expr:
@@ -174,7 +263,9 @@ class _ToWarp(ast.NodeTransformer):
             return self._expression("wp.tid()")
         if name == "point":
             return self._expression("VecD()")
-        if name in ATOMICS:
+        if name == "u64":
+            node.func = self._expression("wp.uint64")
+        elif name in ATOMICS:
             node.func = self._expression(ATOMICS[name][1])
         elif name in _WARP_BUILTINS:
             node.func = self._expression(_WARP_BUILTINS[name])
@@ -186,6 +277,11 @@ class _ToWarp(ast.NodeTransformer):
         return node
 
     def visit_Assign(self, node):
+        if isinstance(node.value, ast.Call) and self.writes.get(_name(node.value.func)):
+            back = self._written_back(node.value)
+            target = node.targets[0]
+            targets = [*(target.elts if isinstance(target, ast.Tuple) else [target]), *back]
+            node.targets = [targets[0] if len(targets) == 1 else ast.Tuple(targets, ast.Store())]
         self.generic_visit(node)
         value = node.value
         if isinstance(value, ast.UnaryOp) and isinstance(value.op, ast.USub):
@@ -214,13 +310,17 @@ def render(text: str, dialect: str) -> str:
     Numba module for the CPU or CUDA that defines ``D``, ``point()`` and ``sd``; device functions
     only), ``"cuda"`` (numba-cuda: the same, which imports ``cuda``, kernels too) or ``"warp"`` (a
     Warp module that defines ``F``, ``D``, ``VecD`` and ``sd``): functions only, with their
-    docstrings (the comments are the source's)."""
+    docstrings (the comments are the source's). The functions that write points must be in the
+    same ``text`` as their callers."""
     if dialect not in ("numba", "cuda", "warp"):
         raise KernelError(f"dialect must be 'numba', 'cuda' or 'warp', got {dialect!r}")
+    functions = _parse(text)
+    writes = written_points(functions)
+    arity = {function.name: _arity(function) for function in functions}
     printed = []
-    for function in _parse(text):
+    for function in functions:
         types = _argument_types(function)
-        _check(function, types)
+        _check(function, types, writes)
         if dialect == "numba":
             for name in ("thread", *ATOMICS):
                 if _calls(function, name):
@@ -235,7 +335,22 @@ def render(text: str, dialect: str) -> str:
         for arg in function.args.args:
             arg.annotation = ast.parse(ARGUMENT_TYPES[types[arg.arg]], mode="eval").body
         decorator = "wp.kernel" if is_kernel(function) else "wp.func"
-        function = _ToWarp(types).visit(function)
+        returned = [function.args.args[k].arg for k in writes[function.name]]
+        if returned and not _always_returns(function.body):  # a procedure: it returns the points it wrote
+            function.body.append(ast.Return(value=None))
+        function = _ToWarp(types, writes, arity, returned).visit(function)
         function.decorator_list = [ast.parse(decorator, mode="eval").body]
-        printed.append(ast.unparse(function))
+        printed.append(ast.unparse(ast.fix_missing_locations(function)))
     return "\n\n\n".join(printed) + "\n"
+
+
+def _always_returns(statements) -> bool:
+    """Whether every path through ``statements`` ends in a return."""
+    if not statements:
+        return False
+    last = statements[-1]
+    if isinstance(last, ast.Return):
+        return True
+    if isinstance(last, ast.If):
+        return _always_returns(last.body) and _always_returns(last.orelse)
+    return False
