@@ -206,6 +206,18 @@ SOURCES = {
     **{f"armadillo_100k_h100_warp_issue48_step9d_turn{turn}_{version}.json": Source(
         "H100", commit, "STEP=step9d bash bench/gpu_issue48_step9.sh warp", "2026-11-27")
        for turn in (1, 2) for version, commit in (("base", "1b1777e"), ("now", "ba917bf"))},
+    # Issue 48's tenth step (the kernels written once): bench/gpu_issue48_step10.sh on H100s, NumPy 2.4 carried,
+    # against 96d6760; the turns with the final code (0273d65), the fresh machine with it less its index changes (the
+    # guard as a flag, the box read once), which came after on the same day.
+    **{f"armadillo_100k_h100_{backend}_issue48_step10c_turn{turn}_{version}.json": Source(
+        "H100", commit, "STEP=step10c bash bench/gpu_issue48_step10.sh turns", "2026-11-28")
+       for version, commit in (("base", "96d6760"), ("now", "0273d65")) for backend in ("warp", "numba_cuda")
+       for turn in (1, 2)},
+    "armadillo_100k_h100_backends_issue48_step10c_now.json": Source(
+        "H100", "0273d65", "STEP=step10c bash bench/gpu_issue48_step10.sh turns", "2026-11-28"),
+    **{f"fresh_machine_h100_issue48_step10_{version}.json": Source(
+        "H100", commit, "bash bench/gpu_issue48_step10.sh fresh", "2026-11-28")
+       for version, commit in (("base", "96d6760"), ("now", "0273d65 less its index changes"))},
     "ahead_fraction_2core.json": Source(
         "2 cores", "1e767cb", "python bench/ahead_tail.py --starts 3e-4 --fractions 0.64 0.512 0.4 --large-seeds 3"),
     "work_model_2core_armadillo_100k_issue48_step7.json": Source(
@@ -486,13 +498,15 @@ def scale_h100() -> list[str]:
     beside8 = load("armadillo_100k_h100_backends_issue48_step8_now.json")
     million_cuda = {case: load(f"{case}_1m_h100_backends_issue48_step8_now.json")
                     for case in ("armadillo", "cube", "square")}
-    # Issue 48's ninth step (numba-cuda's compile): one H100 lease's first launches, an H200's and an H100's turns.
-    compile9 = {version: load(f"cuda_compile_h100_issue48_step9_{version}.json") for version in ("now", "base")}
-    launches9 = {version: {row["kernel"]: row["seconds"] for row in compile9[version]["first_launches"]
-                           if row["seconds"] > 0} for version in compile9}
-    turns9c = {version: [load(f"armadillo_100k_h100_numba_cuda_issue48_step9c_turn{turn}_{version}.json")["numba-cuda"]
-                         for turn in (1, 2)] for version in ("base", "now")}
-    beside9 = load("armadillo_100k_h100_backends_issue48_step9c_now.json")
+    # Issue 48's tenth step (the kernels written once): one H100 lease's turns with 96d6760, a fresh machine's compile.
+    turns10 = {(backend, version): [
+        load(f"armadillo_100k_h100_{backend}_issue48_step10c_turn{turn}_{version}.json")[backend.replace("_", "-")]
+        for turn in (1, 2)] for backend in ("warp", "numba_cuda") for version in ("base", "now")}
+    beside10 = load("armadillo_100k_h100_backends_issue48_step10c_now.json")
+    fresh10 = {version: {row["backend"]: row
+                         for row in load(f"fresh_machine_h100_issue48_step10_{version}.json")["rows"]}
+               for version in ("base", "now")}
+    guard10 = (RESULTS / "index_guard_h100_issue48_step10.txt").read_text()
     peak8 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
                             (RESULTS / "memory_h100_issue48_step8.txt").read_text()))
     arm5_1m = final["armadillo_1m_h100"]["warp"]
@@ -508,11 +522,11 @@ def scale_h100() -> list[str]:
                    "armadillo_100k_h100_backends_issue48_step8_now.json",
                    *[f"{case}_1m_h100_backends_issue48_step8_now.json" for case in ("armadillo", "cube", "square")],
                    "armadillo_100k_h100_backends_issue48_step8b_now.json"]
-    step9_files = ["cuda_compile_h100_issue48_step9_base.json",  # a line per machine and commit
-                   *[f"armadillo_100k_h100_numba_cuda_issue48_step9c_turn{turn}_base.json" for turn in (1, 2)],
-                   "cuda_compile_h100_issue48_step9_now.json",
-                   *[f"armadillo_100k_h100_numba_cuda_issue48_step9c_turn{turn}_now.json" for turn in (1, 2)],
-                   "armadillo_100k_h100_backends_issue48_step9c_now.json"]
+    step10_files = [*[f"armadillo_100k_h100_{backend}_issue48_step10c_turn{turn}_{version}.json"  # a line per commit
+                      for version in ("base", "now") for backend in ("warp", "numba_cuda") for turn in (1, 2)],
+                    "armadillo_100k_h100_backends_issue48_step10c_now.json",
+                    "fresh_machine_h100_issue48_step10_now.json"]
+    step10_files.insert(4, "fresh_machine_h100_issue48_step10_base.json")  # beside the turns of its commit
 
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
     before = load("profile_kernels_h100_armadillo_issue48_before.json")["warp"]
@@ -600,35 +614,42 @@ def scale_h100() -> list[str]:
         + f"; peak memory the armadillo {int(peak8['armadillo']):,} MiB, the cube {int(peak8['cube']):,} MiB "
         "([output](../bench/results/memory_h100_issue48_step8.txt)). Its tests pass on the H100 "
         "([output](../bench/results/gpu_tests_h100_issue48_step8b.txt)); its compile: the eighth step's figures are "
-        "in the history, the ninth's below.",
-        "**numba-cuda's compile** (ninth step): a fresh H100's first packing of a mesh launched kernels for "
-        f"{sum(launches9['base'].values()):.1f} s at 213591c, of which the link (PTX to SASS, nvJitLink) "
-        f"{sum(row['link_s'] for row in compile9['base']['first_launches']):.1f} s and move_ids "
-        f"{launches9['base']['move_ids']:.1f} s: its converge was inlined three times (the move, and the polish "
-        "from two places). With the move and the polish one loop, a mesh alone given its own program (the surface "
-        "queries without the interpreter) and device functions compiled once per argument types (numba-cuda typed "
-        "each int constant as its own literal: three copies of the triangle query), "
-        f"{sum(launches9['now'].values()):.1f} s (0b2cd93; move_ids {launches9['now']['move_ids']:.1f} s, link "
-        f"{sum(row['link_s'] for row in compile9['now']['first_launches']):.1f} s; on 2 cores its PTX went from "
-        "39,677 lines to 20,980); then numba-cuda's converge became a move launch, one heavy kernel fewer: "
-        "the Compile once section's table. Relinking the three heaviest kernels in three threads took "
-        f"{compile9['now']['link_study']['link_threads_s']:.2f} s against "
-        f"{sum(compile9['now']['link_study']['link_serial_s'].values()):.2f} s one after another; ptxas -O1 "
-        f"{sum(compile9['now']['link_study']['ptxas -O1'].values()):.2f} s (neither is used). The packings are the "
-        "same (42 rounds, fill "
-        f"{turns9c['now'][0]['fill']:.5f}); in turns with 213591c, numba-cuda took "
-        + ", ".join(seconds(run["median"]) for run in turns9c["base"]) + " before and "
-        + ", ".join(seconds(run["median"]) for run in turns9c["now"]) + " after on a slow H100 lease (the history has "
-        "an H200's, of 0b2cd93: the same), where "
-        f"numba-cuda took {seconds(beside9['numba-cuda']['median'])}, Warp {seconds(beside9['warp']['median'])} and "
-        f"numba on the host's cores {seconds(beside9['numba']['median'])} in one process "
-        f"({beside9['numba']['median'] / beside9['numba-cuda']['median']:.1f}x, "
-        f"{beside9['numba']['median'] / beside9['warp']['median']:.1f}x): numba-cuda's 5x holds on some leases "
-        "only. numba-cuda's tests pass on the H100 ([output](../bench/results/gpu_tests_h100_issue48_step9b.txt)). "
-        "Warp's peak memory at a million (seventh step): the armadillo "
-        f"{int(peak7['armadillo']):,} MiB, the cube {int(peak7['cube']):,} MiB. The steps before, and their figures: "
-        "[benchmarks-history.md](benchmarks-history.md).",
-        *sources(*step9_files, *step8_files, *step7_files, "round_time_h100_cube_issue20_step7.json",
+        "in the history, as are the ninth's.",
+        "**One description for both GPU backends** (tenth step, `ndpack/kernels/portable.py`): the move (a "
+        "prototype's converge, restarts and polish), the sphere index's queries and the prototype store's kernels "
+        "are written once, in Numba's dialect with typed arguments (`ndpack/backends/move_kernels.py`, "
+        "`index_kernels.py`, `store_kernels.py`), and printed for Numba, numba-cuda and Warp; a point is an array in "
+        "Numba and a value in Warp (kept in registers), so in Warp a function returns the points it writes and its "
+        "callers assign them back. Warp and numba-cuda now pack the same spheres (the armadillo at 100,000: "
+        f"{turns10[('warp', 'now')][0]['rounds']} rounds, fill {turns10[('warp', 'now')][0]['fill']:.5f}, every "
+        "sphere alike, [output](../bench/results/same_spheres_h100_issue48_step10_warp.txt)); numba-cuda's are "
+        "96d6760's; Warp's part from 96d6760's after a difference in the last bits (the same rounds and fill to five "
+        "digits; on 2 cores Warp's CPU device and numba pack as before to the bit). In turns with 96d6760 on one "
+        "H100 lease: Warp "
+        + ", ".join(seconds(run["median"]) for run in turns10[("warp", "base")]) + " before and "
+        + ", ".join(seconds(run["median"]) for run in turns10[("warp", "now")]) + " after, numba-cuda "
+        + ", ".join(seconds(run["median"]) for run in turns10[("numba_cuda", "base")]) + " and "
+        + ", ".join(seconds(run["median"]) for run in turns10[("numba_cuda", "now")]) + " (medians of 2; a "
+        "process's first run is slow on these leases); in one process numba-cuda "
+        f"{seconds(beside10['numba-cuda']['median'])}, Warp {seconds(beside10['warp']['median'])}, numba on the "
+        f"host's 16 cores {seconds(beside10['numba']['median'])} "
+        f"({beside10['numba']['median'] / beside10['numba-cuda']['median']:.1f}x, "
+        f"{beside10['numba']['median'] / beside10['warp']['median']:.1f}x: short of 5x on this lease). Numba's guard "
+        "of the index walk against a corrupt list, a return inside its loops, made Warp's index kernels 3x slower ("
+        + re.search(r"## return\n.*?index_fill_ids +\d+ +([\d.]+)", guard10, re.S).group(1) + " s against "
+        + re.search(r"## none\n.*?index_fill_ids +\d+ +([\d.]+)", guard10, re.S).group(1) + " s for "
+        "`index_fill_ids`); it is now a flag that ends the loops, as fast as none, and numba-cuda's index kernels "
+        "gained 20-30% with it ([output](../bench/results/index_guard_h100_issue48_step10.txt)). A fresh H100's "
+        "first packing of the armadillo, every cache empty: numba-cuda "
+        f"{seconds(fresh10['now']['numba-cuda']['whole_s'])} (96d6760: "
+        f"{seconds(fresh10['base']['numba-cuda']['whole_s'])}), Warp {seconds(fresh10['now']['warp']['whole_s'])} "
+        f"({seconds(fresh10['base']['warp']['whole_s'])}). The GPU tests, run before the guard's change, pass on the "
+        "H100 but those that need Warp's CPU compiler, which its Warp lacks (now skipped there; "
+        "[output](../bench/results/gpu_tests_h100_issue48_step10.txt)). Warp's peak memory at a million (seventh "
+        f"step): the armadillo {int(peak7['armadillo']):,} MiB, the cube {int(peak7['cube']):,} MiB. The ninth step "
+        "(numba-cuda's compile) and "
+        "those before, and their figures: [benchmarks-history.md](benchmarks-history.md).",
+        *sources(*step10_files, *step8_files, *step7_files, "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
                  "policy_fill_2core_10k.json"),
     ]
