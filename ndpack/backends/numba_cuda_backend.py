@@ -33,24 +33,12 @@ from .numba_common import FD_STEP, KERNELS
 from .numba_cuda_lanes import CONVERGE_MOST, COOPERATIVE_MOST, LANES, has_walk, lanes_text, shared_bytes
 from .prototypes import SPREAD_MAX, DevicePrototypes, best_starts, no_wall
 
-ENTRIES = '''
-def near_count(lower, upper, reach, centers, radii, counts, out):
-    b = cuda.grid(1)
-    if b < lower.shape[0]:
-        counts[b] = near_one(b, lower, upper, reach, centers, radii, out, 0)
-
-
-def near_fill(lower, upper, reach, centers, radii, out):
-    b = cuda.grid(1)
-    if b < lower.shape[0]:
-        near_one(b, lower, upper, reach, centers, radii, out, out.shape[1])
-'''
-
-# The prototype store's kernels over every prototype and by id, and the sphere index's clearing:
-# written once for both GPU backends (ndpack.backends.store_kernels), printed for numba-cuda.
+# The GPU backends' kernels (the prototype store's, the device index's build, clearances, touches, the
+# spheres near boxes): written once for both (ndpack.backends.store_kernels), printed for numba-cuda.
 STORE_TEXT = portable_text(STORE)
 STORE_KERNELS = render(STORE_TEXT, "cuda")
-# The move, in numba-cuda's dialect (its cooperative walk has no Warp twin in this form).
+# The move's launch, numba-cuda's own: one kernel serves the cooperative launch (a block per prototype)
+# and the plain one, where Warp has a module for each.
 MOVE_ENTRY = '''
 def move_ids(ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper, wall, prm, centers,
              radii, nbr, steps, h, polish, spread, polish_steps, polish_low, polish_from):
@@ -69,7 +57,7 @@ def move_ids(ids, first, first_rows, tries, stream, points, clearance, polished,
         move_one_lanes(b, lane, ids, first, first_rows, tries, stream, points, clearance, polished, lower, upper,
                        wall, prm, centers, radii, nbr, steps, h, polish, polish_steps, polish_low, polish_from)
 '''
-ENTRY_NAMES = ("near_count", "near_fill", "move_ids", *kernel_names(STORE_TEXT))
+ENTRY_NAMES = ("move_ids", *kernel_names(STORE_TEXT))
 #: Threads of a block in the one-thread-per-item launches; never LANES, which marks a cooperative launch.
 THREADS_PER_BLOCK = 128
 #: NVVM's optimisation of the kernels (numba-cuda's ``opt``; Numba's default is on). Off, a fresh H100's
@@ -84,7 +72,7 @@ def kernels_text(source: str, simulator: bool = False) -> str:
     ``source`` is given, with the cooperative chain (:func:`~ndpack.backends.numba_cuda_lanes.lanes_text`;
     its lane primitives through shared memory for Numba's CUDA ``simulator``)."""
     cooperative = lanes_text(source + "\n\n" + KERNELS, simulator=simulator)
-    return KERNELS + cooperative + ENTRIES + STORE_KERNELS + MOVE_ENTRY
+    return KERNELS + cooperative + STORE_KERNELS + MOVE_ENTRY
 
 
 class NumbaCudaBackend(Backend):
@@ -240,11 +228,12 @@ class NumbaCudaBackend(Backend):
         to = self.cuda.to_device
         args = (to(_f64(box_lower)), to(_f64(box_upper)), to(_f64(reach)), d_centers, d_radii)
         counts = self.cuda.device_array(count, dtype=np.int64)
-        self._launch(namespace["near_count"], count, *args, counts, self.cuda.device_array((1, 1), dtype=np.int64))
+        # First pass counts (into a one-column scratch table), second fills a table that fits.
+        self._launch(namespace["near_all"], count, *args, counts, self.cuda.device_array((count, 1), dtype=np.int64))
         width = int(counts.copy_to_host().max())
         out = to(np.full((count, max(width, 1)), len(centers), dtype=np.int64))
         if width:
-            self._launch(namespace["near_fill"], count, *args, out)
+            self._launch(namespace["near_all"], count, *args, counts, out)
         return out.copy_to_host()[:, :width]
 
     def prototypes(self, shape, cell_lower, cell_upper, reach, points, clearance, wall=None):

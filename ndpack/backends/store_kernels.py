@@ -33,6 +33,16 @@ def touched_all(points: "points", clearance: "floats", centers: "points", radii:
         out[i] = touches(i, points, clearance, centers, radii)
 
 
+def near_all(lower: "points", upper: "points", reach: "floats", centers: "points", radii: "floats", counts: "ints",
+             out: "int_table"):
+    """How many spheres come within reach of box ``b`` (``near_one``, every sphere looked at); the first
+    ``out.shape[1]`` of them in ``out``. The host counts with a one-column scratch table, then fills one
+    that fits."""
+    b = thread()
+    if b < lower.shape[0]:
+        counts[b] = near_one(b, lower, upper, reach, centers, radii, out, out.shape[1])
+
+
 def append(i: "int", points: "points", clearance: "floats", polished: "ints", counter: "ints", out_ids: "ints",
            out_values: "floats", out_points: "points", out_flags: "ints"):
     """Append prototype ``i`` to the answer buffers; returns its slot."""

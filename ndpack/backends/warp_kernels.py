@@ -8,23 +8,13 @@ and ``sd(p, prm)``, and the printed kernels follow it: the move
 (:mod:`ndpack.backends.store_kernels`). What is here is Warp's launch shapes and hash.
 """
 
-# ruff: noqa: F821  (F, D, VecD, sd, near_one, move_one and wp exist where this text runs)
+# ruff: noqa: F821  (F, D, VecD, sd, move_one and wp exist where this text runs)
 
 
 @wp.kernel
 def distance_all(points: wp.array(dtype=VecD), prm: wp.array(dtype=F), out: wp.array(dtype=F)):
     i = wp.tid()
     out[i] = sd(points[i], prm)
-
-
-@wp.kernel
-def near_all(lower: wp.array(dtype=VecD), upper: wp.array(dtype=VecD), reach: wp.array(dtype=F),
-             centers: wp.array(dtype=VecD), radii: wp.array(dtype=F), counts: wp.array(dtype=wp.int32),
-             out: wp.array2d(dtype=wp.int32)):
-    """How many spheres come within reach of box ``b``; the first ``out.shape[1]`` of them in ``out``
-    (numba-cuda counts, then fills)."""
-    b = wp.tid()
-    counts[b] = near_one(b, lower, upper, reach, centers, radii, out, out.shape[1])
 
 
 #: In float32 a query's cell ranges may round to a neighbouring cell of the one a sphere was put
