@@ -49,6 +49,7 @@ import collections
 import json
 import sys
 import time
+import traceback
 from pathlib import Path
 
 import numpy as np
@@ -75,8 +76,17 @@ class LaunchCounter:
     def __init__(self):
         self.kernels = collections.defaultdict(lambda: [0, 0, 0])  # launches, threads, most threads
         self.syncs = 0
+        self.sync_sites = collections.Counter()  # the store's method that waited, and the driver's that asked
         self.rounds = []  # per round: {"launches", "syncs", "move_threads"}
         self._mark = (0, 0, 0)
+
+    def synchronised(self):
+        """Count a synchronisation, by the store's method that made it and the driver's method that called that."""
+        self.syncs += 1
+        frames = [frame for frame in traceback.extract_stack()[:-2] if "ndpack" in frame.filename]
+        store = [frame.name for frame in frames if frame.filename.endswith("prototypes.py")]
+        driver = [frame.name for frame in frames if "drivers" in frame.filename]
+        self.sync_sites[f"{store[0] if store else '-'} (from {driver[-1] if driver else '-'})"] += 1
 
     def launch(self, name, threads, args):
         entry = self.kernels[launch_kind(name, args)]
@@ -113,11 +123,11 @@ def count_launches(shape, count, seed):
             launch_seconds[0] += time.perf_counter() - started
 
     def fetch(self, *pairs):
-        counter.syncs += 1
+        counter.synchronised()
         return saved[1](self, *pairs)
 
     def synchronize(self):
-        counter.syncs += 1
+        counter.synchronised()
         return saved[2](self)
 
     adapter.launch, adapter.fetch, adapter.synchronize = launch, fetch, synchronize
@@ -142,7 +152,8 @@ def count_launches(shape, count, seed):
                for name, v in sorted(counter.kernels.items())}
     return dict(backend="warp, cpu", seconds=seconds, spheres=len(packing), fill=float(packing.fill),
                 rounds=len(counter.rounds), launches=sum(v["launches"] for v in kernels.values()),
-                syncs=counter.syncs, host_rounds_s=stages["rounds"][0] - launch_seconds[0],
+                syncs=counter.syncs, syncs_by_method=dict(counter.sync_sites.most_common()),
+                host_rounds_s=stages["rounds"][0] - launch_seconds[0],
                 verify_s=stages["verify"][0],
                 split_ratio=packing.params.get("split_ratio"), kernels=kernels, per_round=counter.rounds)
 
@@ -327,6 +338,8 @@ def main():
         for name, entry in found["kernels"].items():
             print(f"  {name:24s} {entry['launches']:6,} launches, {entry['threads'] / entry['launches']:10,.0f} "
                   f"threads a launch (most {entry['most_threads']:,})")
+        print("  synchronisations by the store's method (and the driver's that called it): " + ", ".join(
+            f"{site} {n:,}" for site, n in found["syncs_by_method"].items()))
     if "walks" in args.parts:
         result["walks"] = found = count_walks(shape, args.count, args.seed, args.most_points)
         print(f"converge walks (numba, 1 thread): {found['converge_launches']} launches, "

@@ -62,6 +62,9 @@ def test_launches_are_counted_per_round(work_model):
     assert found["launches"] == sum(entry["launches"] for entry in found["kernels"].values())
     assert found["launches"] >= sum(entry["launches"] for entry in found["per_round"])
     assert any(name.startswith("move_ids") for name in found["kernels"]) and found["syncs"] > 0
+    # Every synchronisation is put down to the store's method that made it (the window's, the touched's, ...).
+    assert sum(found["syncs_by_method"].values()) == found["syncs"]
+    assert any(site.startswith("window (from choose)") for site in found["syncs_by_method"])
     # The host's and the check's times are recorded (their size is bench's business, not a test's).
     assert {"host_rounds_s", "verify_s"} <= found.keys()
     assert found["split_ratio"] is not None
