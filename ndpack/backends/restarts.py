@@ -8,8 +8,8 @@ host draws the same numbers for the same prototype, so that every backend still 
 packing from the same seed. The hash is MurmurHash3's 32-bit finaliser. The kernels hold its
 32-bit words in 64-bit integers and mask every product, so that none overflows (NumPy scalars
 warn on overflow, and the CUDA simulator runs the kernels on NumPy scalars); the host hashes
-uint32 arrays, whose products wrap to the same bits. ``numba_kernels.py`` and ``warp_kernels.py`` implement the same
-functions (``restart_key``, ``restart_unit``, ``restart_point``), tested equal to these.
+uint32 arrays, whose products wrap to the same bits. ``move_kernels.py`` implements the same
+functions (``restart_key``, ``restart_unit``) once for every compiled backend, tested equal to these.
 
 A *stream* (one 32-bit number) names one restart of many prototypes: :func:`stream` of the run's
 key and a serial number the driver counts up.
