@@ -88,3 +88,16 @@ turns() {
     done
   done
 }
+
+# fresh_runs NAME SECONDS BACKENDS...: a fresh machine's first packing of /tmp/armadillo.obj (bench/fresh_machine.py)
+# on BACKENDS with this checkout and with .gpu2/base, each within SECONDS, to $OUT/NAME_now.json and $OUT/NAME_base.json.
+fresh_runs() {
+  local name=$1 seconds=$2 version path
+  shift 2
+  for version in now base; do
+    path=$PYTHONPATH
+    [ "$version" = base ] && path=$PWD/.gpu2/base:$PYTHONPATH
+    PYTHONPATH=$path timeout "$seconds" python3 bench/fresh_machine.py --mesh /tmp/armadillo.obj --backends "$@" \
+      --out "$OUT/${name}_${version}.json" 2>&1 | grep -v "^Warp\|^Module"
+  done
+}

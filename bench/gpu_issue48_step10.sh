@@ -49,12 +49,7 @@ case "${1:-}" in
   fresh)
     need_base fresh
     gather_in fresh
-    for version in now base; do
-      path=$PYTHONPATH
-      [ "$version" = base ] && path=$PWD/.gpu2/base:$PYTHONPATH
-      PYTHONPATH=$path timeout 280 python3 bench/fresh_machine.py --mesh /tmp/armadillo.obj --backends numba-cuda warp \
-        --out "$OUT/fresh_machine_${CARD}_issue48_${STEP}_${version}.json" 2>&1 | grep -v "^Warp\|^Module"
-    done
+    fresh_runs "fresh_machine_${CARD}_issue48_${STEP}" 280 numba-cuda warp
     for turn in 1 2 3; do
       for version in base now; do
         kernels "$version" "armadillo_100k_${CARD}_warp_issue48_${STEP}_warp_turn${turn}" --backends warp \

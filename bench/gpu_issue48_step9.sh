@@ -33,12 +33,7 @@ case "${1:-}" in
     ;;
   fresh)
     need_base fresh
-    for version in now base; do
-      path=$PYTHONPATH
-      [ "$version" = base ] && path=$PWD/.gpu2/base:$PYTHONPATH
-      PYTHONPATH=$path timeout 400 python3 bench/fresh_machine.py --mesh /tmp/armadillo.obj --backends numba-cuda warp \
-        --out "$OUT/fresh_machine_${CARD}_issue48_${STEP}_${version}.json" 2>&1 | grep -v "^Warp\|^Module"
-    done
+    fresh_runs "fresh_machine_${CARD}_issue48_${STEP}" 400 numba-cuda warp
     ;;
   cuda)
     need_base cuda
@@ -56,12 +51,7 @@ case "${1:-}" in
     ;;
   warp)
     need_base warp
-    for version in now base; do
-      path=$PYTHONPATH
-      [ "$version" = base ] && path=$PWD/.gpu2/base:$PYTHONPATH
-      PYTHONPATH=$path timeout 200 python3 bench/fresh_machine.py --mesh /tmp/armadillo.obj --backends warp \
-        --out "$OUT/fresh_machine_${CARD}_issue48_${STEP}_${version}.json" 2>&1 | grep -v "^Warp\|^Module"
-    done
+    fresh_runs "fresh_machine_${CARD}_issue48_${STEP}" 200 warp
     for turn in 1 2; do
       for version in base now; do
         kernels "$version" "armadillo_100k_${CARD}_warp_issue48_${STEP}_turn${turn}" --backends warp \

@@ -157,10 +157,10 @@ def launch_kind(name, args):
 
 def _timed_launch(recorder, launch):
     @functools.wraps(launch)
-    def wrapper(self, name, threads, *args, lanes=1):
+    def wrapper(self, name, threads, *args, **options):  # options: lanes, most
         self.synchronize()  # what was queued before (copies) is not this kernel's
         started = time.perf_counter()
-        launch(self, name, threads, *args, lanes=lanes)
+        launch(self, name, threads, *args, **options)
         self.synchronize()
         recorder.kernel(launch_kind(name, args), time.perf_counter() - started, threads)
     return wrapper

@@ -31,7 +31,7 @@ from .device_spheres import DeviceSpheres
 from .kernel_texts import STORE, portable_text
 from .numba_common import FD_STEP, KERNELS
 from .numba_cuda_lanes import CONVERGE_MOST, COOPERATIVE_MOST, LANES, has_walk, lanes_text, shared_bytes
-from .prototypes import SPREAD_MAX, DevicePrototypes, best_starts, no_wall
+from .prototypes import SPREAD_MAX, DevicePrototypes, converge_by_move
 
 # The GPU backends' kernels (the prototype store's, the device index's build, clearances, touches, the
 # spheres near boxes): written once for both (ndpack.backends.store_kernels), printed for numba-cuda.
@@ -187,34 +187,10 @@ class NumbaCudaBackend(Backend):
 
     def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None,
                  starts=None):
-        """The base class's converge, run by the move kernel (``move_ids``: each point its own cell and
-        neighbour row, no restarts, no polish), so that a packing compiles one heavy kernel fewer: the
-        converge kernel was 5.5 s of a fresh H100's first compile of a mesh (bench/cuda_compile.py
-        --on-gpu). Each point starts from the best of it and ``starts`` by clearance, the first of
-        equals, as numba's ``best_start`` chooses; the result is numba's."""
-        if starts is not None and len(starts):
-            points = best_starts(self, shape, np.concatenate([_f64(points)[None], _f64(starts)]), centers, radii,
-                                 neighbours)[0]
-        count = len(points)
-        if count == 0:
-            return np.zeros((0, shape.dim)), np.zeros(0)
-        namespace, params, h = self._kernels(shape)
-        d_centers, d_radii, table = self._spheres_and_table(centers, radii, neighbours)
-        to = self.cuda.to_device
-        out_points = to(_f64(points))
-        out_clearance = self.cuda.device_array(count, dtype=np.float64)
-        polished = self.cuda.device_array(count, dtype=np.int64)
-        wall = no_wall(count) if wall is None else wall
-        d_steps = to(_f64(steps))
-        # The store's argument types exactly (DevicePrototypes.move), so that move_ids compiles once.
-        args = (to(np.arange(count, dtype=np.int64)), self.cuda.device_array((1, shape.dim)), 0, 0, np.uint64(0),
-                out_points, out_clearance, polished, to(_f64(cell_lower)), to(_f64(cell_upper)), to(_f64(wall)), params,
-                d_centers, d_radii, table, d_steps, h, 0, 1, d_steps, float(np.inf), count)
-        if count <= self.cooperative_converge_most and self._walks(shape):
-            namespace["move_ids"][count, LANES, 0, shared_bytes()](*args)  # a block of lanes per point
-        else:
-            self._launch(namespace["move_ids"], count, *args)
-        return out_points.copy_to_host(), out_clearance.copy_to_host()
+        """The base class's converge, run by the move kernel: see
+        :func:`~ndpack.backends.prototypes.converge_by_move`."""
+        return converge_by_move(self, _CudaDevice(self, shape), shape, _f64(points), _f64(cell_lower),
+                                _f64(cell_upper), _f64(centers), _f64(radii), neighbours, _f64(steps), wall, starts)
 
     def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
         if return_bound:
@@ -324,13 +300,14 @@ class _CudaDevice:
     def synchronize(self):
         self.stream.synchronize()
 
-    def launch(self, name, threads, *args, lanes=1):
+    def launch(self, name, threads, *args, lanes=1, most=None):
         """``threads`` threads of kernel ``name``, ``lanes`` of them per item. A move of more than one
-        lane per item and at most the backend's ``cooperative_most`` items, where the shape walks a
-        tree, runs a block of ``LANES`` threads per item, which walk together (numba_cuda_lanes);
-        otherwise the first lane of each item works and the rest idle."""
+        lane per item and at most ``most`` items (default the backend's ``cooperative_most``), where
+        the shape walks a tree, runs a block of ``LANES`` threads per item, which walk together
+        (numba_cuda_lanes); otherwise the first lane of each item works and the rest idle."""
         items = threads // lanes
-        if name == "move_ids" and lanes > 1 and 0 < items <= self.backend.cooperative_most and self.walks:
+        most = self.backend.cooperative_most if most is None else most
+        if name == "move_ids" and lanes > 1 and 0 < items <= most and self.walks:
             self.namespace[name][items, LANES, self.stream, shared_bytes()](*args)
             return
         self.backend._launch(self.namespace[name], threads, *args, stream=self.stream)

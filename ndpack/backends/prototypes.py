@@ -86,6 +86,40 @@ def best_starts(backend, shape, candidates, centers, radii, neighbours):
     return candidates[best, rows], clearance[best, rows]
 
 
+def converge_by_move(backend, device, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps,
+                     wall=None, starts=None):
+    """:meth:`~ndpack.backends.base.Backend.converge` of a GPU backend, run by the store's move kernel
+    (``move_ids``: each point its own cell and neighbour row, no restarts, no polish) with
+    :meth:`DevicePrototypes.move`'s argument types, so that the move kernel, the longest to compile,
+    serves both and no converge kernel compiles (a converge kernel was 5.5 s of a fresh H100's first
+    compile of a mesh on numba-cuda, ``bench/cuda_compile.py --on-gpu``). Each point starts from the
+    best of it and ``starts`` by clearance, the first of equals, as numba's ``best_start`` chooses.
+    At most the backend's ``cooperative_converge_most`` points walk a mesh's tree a block of lanes
+    each (see :mod:`ndpack.backends.warp_lanes`).
+
+    ``device`` is the backend's device adapter for ``shape`` (as :class:`DevicePrototypes` takes);
+    the other arguments and the result are :meth:`~ndpack.backends.base.Backend.converge`'s: points
+    (k, d) float64 and clearance (k,) float64.
+    """
+    points = backend._best_of_starts(shape, points, starts, centers, radii, neighbours)
+    count = len(points)
+    if count == 0:
+        return np.zeros((0, shape.dim)), np.zeros(0)
+    wall = no_wall(count) if wall is None else wall
+    table = neighbours if neighbours.shape[1] else np.full((count, 1), len(centers))  # a padded row each
+    d_centers, d_radii = device.spheres(centers, radii)
+    d_points, d_clearance, d_steps = device.upload(points, "point"), device.empty(count, "float"), device.upload(
+        steps, "float")
+    most = backend.cooperative_converge_most
+    lanes = SPREAD_MAX if count <= most else 1
+    device.launch("move_ids", lanes * count, device.upload(np.arange(count), "index"), device.empty(1, "point"), 0, 0,
+                  np.uint64(0), d_points, d_clearance, device.empty(count, "index"), device.upload(cell_lower, "point"),
+                  device.upload(cell_upper, "point"), device.upload(wall, "float"), device.params, d_centers, d_radii,
+                  device.upload(table, "index"), d_steps, device.h, 0, lanes, d_steps, float(np.inf), count,
+                  lanes=lanes, most=most)
+    return tuple(device.fetch((d_points, count), (d_clearance, count)))
+
+
 def top_order(ids: np.ndarray, clearance: np.ndarray, k: int) -> np.ndarray:
     """Positions (k,) of the ``k`` largest clearances, largest first and ties by lower id.
 

@@ -33,7 +33,7 @@ from ..kernels.tape import interpreter
 from .base import Backend, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
 from .kernel_texts import INDEX, MOVE, STORE, portable_text
-from .prototypes import SPREAD_MAX, DevicePrototypes, no_wall
+from .prototypes import SPREAD_MAX, DevicePrototypes, converge_by_move
 from .warp_lanes import CONVERGE_MOST, COOPERATIVE_MOST, LANES, SHARE_EVERY, functions_only, has_walk, lanes_text
 
 #: Warp's own kernels, then the move, the sphere index's queries and the store's kernels, written once for
@@ -202,31 +202,10 @@ class WarpBackend(Backend):
 
     def converge(self, shape, points, cell_lower, cell_upper, centers, radii, neighbours, steps, wall=None,
                  starts=None):
-        """The base class's converge, run by the move kernel (``move_ids``: each point its own cell and
-        neighbour row, no restarts, no polish), as numba-cuda's: one kernel (and one cooperative
-        kernel) fewer to compile. Each point starts from the best of it and ``starts`` by clearance."""
-        points = self._best_of_starts(shape, points, starts, centers, radii, neighbours)
-        count = len(points)
-        if count == 0:
-            return np.zeros((0, shape.dim)), np.zeros(0)
-        module, params, h = self._module(shape)
-        wall = no_wall(count) if wall is None else wall
-        d_centers, d_radii, table = self._spheres_and_table(module, centers, radii, neighbours)
-        out_points = self._points(module, points)
-        out_clearance = self.wp.empty(count, dtype=module.F, device=self.device)
-        d_steps = self._array(steps, module.F)
-        polished = self.wp.empty(count, dtype=self.wp.int32, device=self.device)
-        inputs = [self._array(np.arange(count), self.wp.int32), self.wp.empty(1, dtype=module.VecD, device=self.device),
-                  0, 0, 0, out_points, out_clearance, polished, self._points(module, cell_lower),
-                  self._points(module, cell_upper), self._array(wall, module.F), params, d_centers, d_radii, table,
-                  d_steps, h, 0, 1, d_steps, self.float(np.inf), count]
-        lanes = self._lanes_module(shape) if count <= self.cooperative_converge_most else None
-        if lanes is not None:
-            self.wp.launch_tiled(lanes.move_ids_lanes, dim=[count], inputs=inputs, block_dim=LANES, device=self.device)
-        else:
-            self.wp.launch(module.move_ids, dim=count, device=self.device, inputs=inputs)
-        return (out_points.numpy().reshape(count, -1).astype(np.float64),
-                out_clearance.numpy().astype(np.float64))
+        """The base class's converge, run by the move kernel: see
+        :func:`~ndpack.backends.prototypes.converge_by_move`."""
+        return converge_by_move(self, _WarpDevice(self, shape), shape, points, cell_lower, cell_upper, centers, radii,
+                                neighbours, steps, wall, starts)
 
     def near_spheres(self, box_lower, box_upper, reach, centers, radii, return_bound=False):
         if return_bound:
@@ -327,14 +306,15 @@ class _WarpDevice:
     def synchronize(self):
         self.wp.synchronize_device(self.where)
 
-    def launch(self, name, threads, *args, lanes=1):
+    def launch(self, name, threads, *args, lanes=1, most=None):
         """``threads`` threads of kernel ``name``, ``lanes`` of them per item. A launch of more than
-        one lane per item and at most the backend's ``cooperative_most`` items runs the cooperative
-        kernel ``name_lanes`` instead where the shape has one: a block of ``LANES`` per item."""
+        one lane per item and at most ``most`` items (default the backend's ``cooperative_most``)
+        runs the cooperative kernel ``name_lanes`` instead where the shape has one: a block of
+        ``LANES`` per item."""
         if not threads:
             return
         items = threads // lanes
-        if lanes > 1 and items <= self.backend.cooperative_most:
+        if lanes > 1 and items <= (self.backend.cooperative_most if most is None else most):
             cooperative = getattr(self.backend._lanes_module(self.shape), name + "_lanes", None)
             if cooperative is not None:
                 self._replay(cooperative, [items, LANES], args, LANES)  # a tiled launch: a block per item

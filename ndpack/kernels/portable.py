@@ -119,24 +119,29 @@ def _arity(function: ast.FunctionDef) -> int:
 def written_points(functions: list[ast.FunctionDef]) -> dict[str, list[int]]:
     """Per function, the positions of the point arguments it writes: directly (``p[k] = ...``) or
     by passing them to a function that writes them (to a fixed point)."""
-    by_name = {function.name: function for function in functions}
-    writes: dict[str, set[int]] = {name: set() for name in by_name}
+    direct, calls, arguments = {}, {}, {}
+    for function in functions:  # each function's summary, walked once
+        names = [arg.arg for arg in function.args.args]
+        points = _points(function)
+        arguments[function.name] = [name if name in points else None for name in names]
+        direct[function.name] = {_name(target.value) for node in ast.walk(function)
+                                 if isinstance(node, ast.Assign | ast.AugAssign)
+                                 for target in (node.targets if isinstance(node, ast.Assign) else [node.target])
+                                 if isinstance(target, ast.Subscript)}
+        calls[function.name] = [(_name(node.func), [_name(arg) for arg in node.args]) for node in ast.walk(function)
+                                if isinstance(node, ast.Call) and _name(node.func) in arguments]
+    writes: dict[str, set[int]] = {function.name: set() for function in functions}
     changed = True
     while changed:
         changed = False
-        for function in functions:
-            names = [arg.arg for arg in function.args.args]
-            written = set()
-            for node in ast.walk(function):
-                if isinstance(node, ast.Assign | ast.AugAssign):
-                    for target in (node.targets if isinstance(node, ast.Assign) else [node.target]):
-                        if isinstance(target, ast.Subscript) and _name(target.value) in names:
-                            written.add(_name(target.value))
-                elif isinstance(node, ast.Call) and _name(node.func) in writes:
-                    written.update(_name(node.args[k]) for k in writes[_name(node.func)] if k < len(node.args))
-            positions = {k for k, name in enumerate(names) if name in written and name in _points(function)}
-            if positions - writes[function.name]:
-                writes[function.name] |= positions
+        for name, own in arguments.items():
+            written = set(direct[name])
+            for callee, passed in calls[name]:
+                if callee in writes:
+                    written.update(passed[k] for k in writes[callee] if k < len(passed))
+            positions = {k for k, argument in enumerate(own) if argument is not None and argument in written}
+            if positions - writes[name]:
+                writes[name] |= positions
                 changed = True
     return {name: sorted(positions) for name, positions in writes.items()}
 
@@ -318,14 +323,14 @@ def render(text: str, dialect: str) -> str:
     writes = written_points(functions)
     arity = {function.name: _arity(function) for function in functions}
     printed = []
-    for function in functions:
+    for function, copied in zip(functions, _parse(text)):  # a second parse to print from: faster than a deepcopy
         types = _argument_types(function)
         _check(function, types, writes)
         if dialect == "numba":
             for name in ("thread", *ATOMICS):
                 if _calls(function, name):
                     _fail(function, function, f"{name}() needs a GPU dialect ('cuda' or 'warp')")
-        function = copy.deepcopy(function)
+        function = copied
         if dialect != "warp":
             for arg in function.args.args:
                 arg.annotation = None
