@@ -61,7 +61,11 @@ TYPICAL_SECONDS = {"numba": 10, "numba-cuda": 20, "warp": 6, "warp on a GPU": 4}
 #: Warp's CUDA optimisation level for ndpack's modules. At Warp's default (3) a fresh H100's first
 #: packing of a mesh compiled for 90 s (most of it the driver compiling Warp's PTX) and packed the
 #: armadillo's 100,000 spheres in 2.07 s; at 2, 3 s and 2.00 s (medians of 3, the driver's cache
-#: off; bench/compile_options.py, docs/benchmarks.md).
+#: off; bench/compile_options.py, docs/benchmarks.md). With the kernels written once (issue 48's
+#: eleventh step), level 3 compiles the two modules in 12 s and 9 s against 4 s and 3 s, and its
+#: kernels are faster by 3% (the move) to 22% (the cells' distances), the packing by about 2%
+#: (``bash bench/gpu_issue48_step11.sh levels``; ``turns`` at 1fbb251, which built level 3 in the
+#: background): not worth three times the first compile, nor a background build.
 WARP_OPTIMIZATION = 2
 #: Generated modules start with this line, then what they hold (``ndpack backends`` lists them).
 TITLE = "# ndpack kernels: "
@@ -590,10 +594,16 @@ def _warp_cached(wp, module, device) -> bool:
     """Whether Warp holds a binary of ``module`` for ``device`` in its kernel cache (a guess from
     its cache folder; where Warp's layout is not what this expects, False: announce anyway)."""
     try:
-        identifier = wp.get_module(module.__name__).get_module_identifier()
-        folder = Path(wp.config.kernel_cache_dir) / identifier
-        suffixes = (".o",) if wp.get_device(device).is_cpu else (".cubin", ".ptx")
-        return any(path.suffix in suffixes for path in folder.iterdir())
+        # A module's name is a hash of its text, options included, so any build of it is this one.
+        # (Warp names the folder by the name and a hash for the launches' block size, which on a CPU
+        # is 1 where the module's default is 256: asked for the default's folder, every cached CPU
+        # module was announced as compiling.)
+        target = wp.get_device(device)
+        suffixes = (".o",) if target.is_cpu else (".cubin", ".ptx")
+        arch = "" if target.is_cpu else f".sm{target.arch}"
+        return any(path.suffix in suffixes and arch in path.name
+                   for folder in Path(wp.config.kernel_cache_dir).glob(f"wp_{module.__name__}_*")
+                   for path in folder.iterdir())
     except Exception:  # noqa: BLE001 - a guess for a notice, never a failure
         return False
 

@@ -504,3 +504,48 @@ def test_a_numba_cuda_kernels_first_launch_is_timed_for_the_next_notice(tmp_path
     monkeypatch.setattr(kernel_compile, "_announced_cuda", set())
     kernel_compile.CudaKernel(Fake(tmp_path / "missing2.nbi"))[1, 32](8)
     assert f"about {estimate:.0f} s" in notices[-1], notices
+
+
+class _SmallProgram:
+    """What warp_module reads of a program: a title, a dimension and its Warp source."""
+
+    dim = 2
+
+    def __init__(self, title):
+        self.title = title
+
+    def source(self, dialect, float_name):
+        return "@wp.func\ndef sd(p: VecD, prm: wp.array(dtype=F)):\n    return wp.length(p) - prm[0]\n"
+
+
+_SMALL_KERNELS = '''
+@wp.kernel
+def distances(points: wp.array(dtype=VecD), prm: wp.array(dtype=F), out: wp.array(dtype=F)):
+    i = wp.tid()
+    out[i] = sd(points[i], prm)
+'''
+
+
+def test_a_warp_module_in_warps_cache_is_known_as_built(tmp_path, monkeypatch):
+    """The compile notice asks whether Warp's cache holds the module's binary: not before it is
+    built, yes after (on a CPU too, where Warp names the folder for blocks of 1 thread: every
+    cached module had been announced as compiling)."""
+    wp = pytest.importorskip("warp")
+    if not wp.is_cpu_available():
+        pytest.skip("Warp's CPU compiler is not installed here (the GPU machine's copy)")
+    import uuid
+
+    monkeypatch.setenv("NDPACK_CACHE", str(tmp_path))
+    program = _SmallProgram(f"a stand-in program {uuid.uuid4().hex}")  # a module no cache holds yet
+    module = kernel_compile.warp_module(program, "float64", _SMALL_KERNELS)
+    assert not kernel_compile._warp_cached(wp, module, "cpu")
+    notices = []
+    monkeypatch.setattr(kernel_compile, "notice", notices.append)
+    loaded = kernel_compile.warp_module(program, "float64", _SMALL_KERNELS, device="cpu")
+    assert loaded is module and len(notices) == 1  # built, and said so
+    assert kernel_compile._warp_cached(wp, module, "cpu")
+    out = wp.empty(2, dtype=module.F, device="cpu")
+    wp.launch(module.distances, dim=2, device="cpu", inputs=[
+        wp.array([[3.0, 4.0], [0.0, 0.5]], dtype=module.VecD, device="cpu"),
+        wp.array([1.0], dtype=module.F, device="cpu"), out])
+    np.testing.assert_allclose(out.numpy(), [4.0, -0.5])
