@@ -218,6 +218,24 @@ SOURCES = {
     **{f"fresh_machine_h100_issue48_step10_{version}.json": Source(
         "H100", commit, "bash bench/gpu_issue48_step10.sh fresh", "2026-11-28")
        for version, commit in (("base", "96d6760"), ("now", "0273d65 less its index changes"))},
+    # Issue 48's eleventh step: bench/gpu_issue48_step11.sh on H100s, NumPy 2.4 carried; the base 64cf4e0; the Warp
+    # level-3 tier kept aside at 1fbb251 (not on main).
+    **{name: Source("H100", "64cf4e0", f"bash bench/gpu_issue48_step11.sh {mode}", "2026-11-28") for name, mode in (
+        ("where_h100_warp_issue48_step11.json", "where"), ("where_h100_numba_cuda_issue48_step11.json", "where"),
+        ("armadillo_100k_h100_backends_issue48_step11_where.json", "where"),
+        ("compile_options_h100_issue48_step11.json", "levels"),
+        *[(f"armadillo_100k_h100_numba_cuda_deallocs{count}_issue48_step11_turn{turn}_now.json", "deallocs")
+          for count in (10, 1000000) for turn in (1, 2)],
+        *[(f"armadillo_100k_h100_numba_cuda_issue48_step11_turn{turn}_base.json", "flush") for turn in (1, 2)])},
+    **{name: Source("H100", "a89e925", "bash bench/gpu_issue48_step11.sh flush", "2026-11-28") for name in (
+        "armadillo_100k_h100_numba_cuda_issue48_step11_turn1_now.json",
+        "armadillo_100k_h100_numba_cuda_issue48_step11_turn2_now.json",
+        "armadillo_100k_h100_backends_issue48_step11_flush.json")},
+    **{name: Source("H100", "1fbb251", "git checkout 1fbb251 && bash bench/gpu_issue48_step11.sh tiers; ... turns",
+                    "2026-11-28")
+       for name in ("compile_tiers_h100_issue48_step11.json",
+                    *[f"armadillo_100k_h100_warp_issue48_step11tiers_turn{turn}_{version}.json"
+                      for turn in (1, 2) for version in ("base", "now")])},
     "ahead_fraction_2core.json": Source(
         "2 cores", "1e767cb", "python bench/ahead_tail.py --starts 3e-4 --fractions 0.64 0.512 0.4 --large-seeds 3"),
     "work_model_2core_armadillo_100k_issue48_step7.json": Source(
@@ -493,22 +511,30 @@ def scale_h100() -> list[str]:
     # Issue 48's eighth step (numba-cuda's cooperative walk), one H100 lease with NumPy 2.4 carried.
     backends8 = load("armadillo_100k_h100_backends_issue48_step8b_now.json")  # the three backends in one process
     arm5, arm5_cuda, arm5_cpu = backends8["warp"], backends8["numba-cuda"], backends8["numba"]
-    lanes8 = load("armadillo_100k_h100_numba_cuda_issue48_step8_now.json")
-    base8 = load("armadillo_100k_h100_numba_cuda_issue48_step8_base.json")["numba-cuda"]
-    beside8 = load("armadillo_100k_h100_backends_issue48_step8_now.json")
     million_cuda = {case: load(f"{case}_1m_h100_backends_issue48_step8_now.json")
                     for case in ("armadillo", "cube", "square")}
-    # Issue 48's tenth step (the kernels written once): one H100 lease's turns with 96d6760, a fresh machine's compile.
-    turns10 = {(backend, version): [
-        load(f"armadillo_100k_h100_{backend}_issue48_step10c_turn{turn}_{version}.json")[backend.replace("_", "-")]
-        for turn in (1, 2)] for backend in ("warp", "numba_cuda") for version in ("base", "now")}
-    beside10 = load("armadillo_100k_h100_backends_issue48_step10c_now.json")
-    fresh10 = {version: {row["backend"]: row
-                         for row in load(f"fresh_machine_h100_issue48_step10_{version}.json")["rows"]}
-               for version in ("base", "now")}
-    guard10 = (RESULTS / "index_guard_h100_issue48_step10.txt").read_text()
-    peak8 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
-                            (RESULTS / "memory_h100_issue48_step8.txt").read_text()))
+    # Issue 48's eleventh step: where the time goes, Warp's levels, numba-cuda's frees.
+    where11 = {backend: load(f"where_h100_{backend}_issue48_step11.json")[backend.replace("_", "-")]
+               for backend in ("warp", "numba_cuda")}
+    levels11 = {}
+    for row in load("compile_options_h100_issue48_step11.json")["rows"]:
+        levels11.setdefault(row["variant"], []).append(row)
+    tiers11 = {version: [load(f"armadillo_100k_h100_warp_issue48_step11tiers_turn{turn}_{version}.json")["warp"]
+                         for turn in (1, 2)] for version in ("base", "now")}
+    frees11 = {count: [load(f"armadillo_100k_h100_numba_cuda_deallocs{count}_issue48_step11_turn{turn}_now.json")
+                       ["numba-cuda"] for turn in (1, 2)] for count in (10, 1000000)}
+    flush11 = {version: [load(f"armadillo_100k_h100_numba_cuda_issue48_step11_turn{turn}_{version}.json")["numba-cuda"]
+                         for turn in (1, 2)] for version in ("base", "now")}
+    beside11 = load("armadillo_100k_h100_backends_issue48_step11_flush.json")
+    step11_files = ["where_h100_warp_issue48_step11.json", "where_h100_numba_cuda_issue48_step11.json",
+                    "compile_options_h100_issue48_step11.json",
+                    *[f"armadillo_100k_h100_numba_cuda_deallocs{count}_issue48_step11_turn{turn}_now.json"
+                      for count in (10, 1000000) for turn in (1, 2)],
+                    *[f"armadillo_100k_h100_numba_cuda_issue48_step11_turn{turn}_base.json" for turn in (1, 2)],
+                    *[f"armadillo_100k_h100_numba_cuda_issue48_step11_turn{turn}_now.json" for turn in (1, 2)],
+                    "armadillo_100k_h100_backends_issue48_step11_flush.json",
+                    *[f"armadillo_100k_h100_warp_issue48_step11tiers_turn{turn}_{version}.json"
+                      for turn in (1, 2) for version in ("base", "now")]]
     arm5_1m = final["armadillo_1m_h100"]["warp"]
     cube_1m, cube_1m_cpu = final["cube_1m_h100"]["warp"], final["cube_1m_h100host_numba"]["numba"]
     square_1m, square_1m_cpu = final["square_1m_h100"]["warp"], final["square_1m_h100host_numba"]["numba"]
@@ -517,16 +543,9 @@ def scale_h100() -> list[str]:
     step7_files = ["profile_kernels_h100_armadillo_issue48_step7.json"]
     step7_files += [f"{name}_issue48_step7b_now.json" for name in final]
     step7_files += ["work_model_2core_armadillo_100k_issue48_step7.json"]
-    step8_files = ["armadillo_100k_h100_numba_cuda_issue48_step8_base.json",
-                   "armadillo_100k_h100_numba_cuda_issue48_step8_now.json",
-                   "armadillo_100k_h100_backends_issue48_step8_now.json",
-                   *[f"{case}_1m_h100_backends_issue48_step8_now.json" for case in ("armadillo", "cube", "square")],
+    # The table's numba-cuda column (the eighth step's paragraph is in the history).
+    step8_files = [*[f"{case}_1m_h100_backends_issue48_step8_now.json" for case in ("armadillo", "cube", "square")],
                    "armadillo_100k_h100_backends_issue48_step8b_now.json"]
-    step10_files = [*[f"armadillo_100k_h100_{backend}_issue48_step10c_turn{turn}_{version}.json"  # a line per commit
-                      for version in ("base", "now") for backend in ("warp", "numba_cuda") for turn in (1, 2)],
-                    "armadillo_100k_h100_backends_issue48_step10c_now.json",
-                    "fresh_machine_h100_issue48_step10_now.json"]
-    step10_files.insert(4, "fresh_machine_h100_issue48_step10_base.json")  # beside the turns of its commit
 
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
     before = load("profile_kernels_h100_armadillo_issue48_before.json")["warp"]
@@ -592,64 +611,49 @@ def scale_h100() -> list[str]:
         f"node); the host's round takes {gpu['host_over_cpu']:.1f}x its 2-core time. The final check finds overlaps in "
         "a grid's sorted rows (Numba), not k-d trees. Cells split finer (ratio 2.5, not 4) filled 0.5% more in 34 "
         "rounds, but took 2.72 s, not 2.07 s ([output](../bench/results/split_ratio_h100_issue48.txt)).",
-        "**numba-cuda's cooperative walk** (eighth step, `ndpack.backends.numba_cuda_lanes`): Warp's design in "
-        "numba-cuda's dialect. A block of 32 threads walks one prototype's tree, its stack in the launch's dynamic "
-        "shared memory (a static array in a device function reached by two paths is defined twice at NVVM's link), "
-        "each lane's pushes placed by two ballots, the best distance agreed by shuffles; one move kernel and one "
-        "converge kernel serve the cooperative and the serial launches, so nothing more compiles. On one H100 lease "
-        "(NumPy 2.4 carried), the armadillo at 100,000 on numba-cuda took "
-        f"{seconds(lanes8['numba-cuda now']['median'])} with cooperative walks and "
-        f"{seconds(lanes8['numba-cuda lanes-off']['median'])} without (the same kernels' serial path, one process), "
-        f"cf9e21a's {seconds(base8['median'])} (its runs "
-        f"{', '.join(seconds(run) for run in base8['unprofiled'])}): the same {lanes8['numba-cuda now']['rounds']} "
-        "rounds, fill "
-        f"{lanes8['numba-cuda now']['fill']:.5f}; numba on the host's cores {seconds(beside8['numba']['median'])} in "
-        f"the next process ({beside8['numba']['median'] / lanes8['numba-cuda now']['median']:.1f}x), "
-        f"{seconds(arm5_cpu['median'])} in the table's run "
-        f"({arm5_cpu['median'] / arm5_cuda['median']:.1f}x): the margin over 5x is thin. At a million, beside Warp in "
-        "one process: "
-        + ", ".join(f"the {name} {seconds(million_cuda[case]['numba-cuda']['median'])} (Warp "
-                    f"{seconds(million_cuda[case]['warp']['median'])})"
-                    for case, name in (("armadillo", "armadillo"), ("cube", "cube"), ("square", "square")))
-        + f"; peak memory the armadillo {int(peak8['armadillo']):,} MiB, the cube {int(peak8['cube']):,} MiB "
-        "([output](../bench/results/memory_h100_issue48_step8.txt)). Its tests pass on the H100 "
-        "([output](../bench/results/gpu_tests_h100_issue48_step8b.txt)); its compile: the eighth step's figures are "
-        "in the history, as are the ninth's.",
-        "**One description for both GPU backends** (tenth step, `ndpack/kernels/portable.py`): the move (a "
-        "prototype's converge, restarts and polish), the sphere index's queries and the prototype store's kernels "
-        "are written once, in Numba's dialect with typed arguments (`ndpack/backends/move_kernels.py`, "
-        "`index_kernels.py`, `store_kernels.py`), and printed for Numba, numba-cuda and Warp; a point is an array in "
-        "Numba and a value in Warp (kept in registers), so in Warp a function returns the points it writes and its "
-        "callers assign them back. Warp and numba-cuda now pack the same spheres (the armadillo at 100,000: "
-        f"{turns10[('warp', 'now')][0]['rounds']} rounds, fill {turns10[('warp', 'now')][0]['fill']:.5f}, every "
-        "sphere alike, [output](../bench/results/same_spheres_h100_issue48_step10_warp.txt)); numba-cuda's are "
-        "96d6760's; Warp's part from 96d6760's after a difference in the last bits (the same rounds and fill to five "
-        "digits; on 2 cores Warp's CPU device and numba pack as before to the bit). In turns with 96d6760 on one "
-        "H100 lease: Warp "
-        + ", ".join(seconds(run["median"]) for run in turns10[("warp", "base")]) + " before and "
-        + ", ".join(seconds(run["median"]) for run in turns10[("warp", "now")]) + " after, numba-cuda "
-        + ", ".join(seconds(run["median"]) for run in turns10[("numba_cuda", "base")]) + " and "
-        + ", ".join(seconds(run["median"]) for run in turns10[("numba_cuda", "now")]) + " (medians of 2; a "
-        "process's first run is slow on these leases); in one process numba-cuda "
-        f"{seconds(beside10['numba-cuda']['median'])}, Warp {seconds(beside10['warp']['median'])}, numba on the "
-        f"host's 16 cores {seconds(beside10['numba']['median'])} "
-        f"({beside10['numba']['median'] / beside10['numba-cuda']['median']:.1f}x, "
-        f"{beside10['numba']['median'] / beside10['warp']['median']:.1f}x: short of 5x on this lease). Numba's guard "
-        "of the index walk against a corrupt list, a return inside its loops, made Warp's index kernels 3x slower ("
-        + re.search(r"## return\n.*?index_fill_ids +\d+ +([\d.]+)", guard10, re.S).group(1) + " s against "
-        + re.search(r"## none\n.*?index_fill_ids +\d+ +([\d.]+)", guard10, re.S).group(1) + " s for "
-        "`index_fill_ids`); it is now a flag that ends the loops, as fast as none, and numba-cuda's index kernels "
-        "gained 20-30% with it ([output](../bench/results/index_guard_h100_issue48_step10.txt)). A fresh H100's "
-        "first packing of the armadillo, every cache empty: numba-cuda "
-        f"{seconds(fresh10['now']['numba-cuda']['whole_s'])} (96d6760: "
-        f"{seconds(fresh10['base']['numba-cuda']['whole_s'])}), Warp {seconds(fresh10['now']['warp']['whole_s'])} "
-        f"({seconds(fresh10['base']['warp']['whole_s'])}). The GPU tests, run before the guard's change, pass on the "
-        "H100 but those that need Warp's CPU compiler, which its Warp lacks (now skipped there; "
-        "[output](../bench/results/gpu_tests_h100_issue48_step10.txt)). Warp's peak memory at a million (seventh "
-        f"step): the armadillo {int(peak7['armadillo']):,} MiB, the cube {int(peak7['cube']):,} MiB. The ninth step "
-        "(numba-cuda's compile) and "
-        "those before, and their figures: [benchmarks-history.md](benchmarks-history.md).",
-        *sources(*step10_files, *step8_files, *step7_files, "round_time_h100_cube_issue20_step7.json",
+        "**Where the time goes, and a small gain** (eleventh step, one H100 lease): the armadillo at 100,000 on Warp "
+        f"took {seconds(where11['warp']['stages']['setup'])} to set up, "
+        f"{seconds(where11['warp']['stages']['rounds'])} in its rounds and "
+        f"{seconds(where11['warp']['stages']['verify'])} for the final check (medians of 3); its kernels "
+        f"{seconds(where11['warp']['device'])} of device time, the move "
+        f"{seconds(where11['warp']['kernels']['move_ids[move+ahead]'][1])} in "
+        f"{where11['warp']['kernels']['move_ids[move+ahead]'][0]} launches; numba-cuda's same kernels "
+        f"{seconds(where11['numba_cuda']['device'])}, its move "
+        f"{seconds(where11['numba_cuda']['kernels']['move_ids[move+ahead]'][1])}: the rest of a round is the host's "
+        "turn, the GPU idle ([Warp](../bench/results/where_h100_warp_issue48_step11.txt), "
+        "[numba-cuda](../bench/results/where_h100_numba_cuda_issue48_step11.txt)). Warp's optimisation level 3 "
+        "(Warp's default) compiled the two modules in "
+        + ", ".join(f"{row['compiles']['warp: meshes on cuda:0']:.0f} s + "
+                    f"{row['compiles']['warp: meshes (cooperative moves) on cuda:0']:.0f} s" for row in levels11["O3"])
+        + " against " + ", ".join(f"{row['compiles']['warp: meshes on cuda:0']:.0f} s + "
+                                 f"{row['compiles']['warp: meshes (cooperative moves) on cuda:0']:.0f} s"
+                                 for row in levels11["ndpack"])
+        + " at ndpack's 2 (fresh caches; [output](../bench/results/compile_options_h100_issue48_step11.json)); with "
+        "it the cells' distances took "
+        + ", ".join(f"{1e3 * run['kernels']['cell_distances'][1]:.0f} ms" for run in tiers11["now"]) + " against "
+        + ", ".join(f"{1e3 * run['kernels']['cell_distances'][1]:.0f} ms" for run in tiers11["base"]) + ", the move "
+        + ", ".join(f"{1e3 * run['kernels']['move_ids[move+ahead]'][1]:.0f} ms" for run in tiers11["now"])
+        + " against "
+        + ", ".join(f"{1e3 * run['kernels']['move_ids[move+ahead]'][1]:.0f} ms" for run in tiers11["base"])
+        + ", the packing " + ", ".join(seconds(run['median']) for run in tiers11["now"]) + " against "
+        + ", ".join(seconds(run['median']) for run in tiers11["base"])
+        + " (in turns, the same spheres): not worth three times the first compile, nor the background build of it "
+        "that 1fbb251 tried (kept aside, not on main). "
+        "numba-cuda frees device memory in batches of 11, and each free waits for the whole device: with batches "
+        "never freed its rounds took "  # numba-cuda's own setting: NUMBA_CUDA_MAX_PENDING_DEALLOCS_COUNT
+        + ", ".join(seconds(run['stages']['rounds']) for run in frees11[1000000]) + " against "
+        + ", ".join(seconds(run['stages']['rounds']) for run in frees11[10]) + "; its store now frees where it has "
+        "just waited for its stream: rounds " + ", ".join(seconds(run['stages']['rounds']) for run in flush11["now"])
+        + " against 64cf4e0's " + ", ".join(seconds(run['stages']['rounds']) for run in flush11["base"])
+        + " in turns, the same spheres ([output](../bench/results/same_spheres_h100_issue48_step11.txt)). In one "
+        f"process: numba-cuda {seconds(beside11['numba-cuda']['median'])}, Warp {seconds(beside11['warp']['median'])}, "
+        f"numba on the host's 16 cores {seconds(beside11['numba']['median'])} "
+        f"({beside11['numba']['median'] / beside11['numba-cuda']['median']:.1f}x, "
+        f"{beside11['numba']['median'] / beside11['warp']['median']:.1f}x). Warp and numba-cuda pack the same spheres "
+        "since the tenth step (the kernels written once); that step's paragraph and the eighth's (numba-cuda's "
+        "cooperative walk) are in the history. Warp's peak memory at a million (seventh step): the armadillo "
+        f"{int(peak7['armadillo']):,} MiB, the cube {int(peak7['cube']):,} MiB.",
+        *sources(*step11_files, *step8_files, *step7_files, "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
                  "policy_fill_2core_10k.json"),
     ]
