@@ -199,6 +199,31 @@ def counting_prototypes(text: str) -> str:
         "        prm[prm.shape[0] - 6 - 3 * i] = prm[prm.shape[0] - 3] - rounds\n"))
 
 
+#: The hard-first question (issue 48, eleventh step): in a move launch too large to be cooperative, the
+#: hardest K prototypes in cooperative blocks and the rest serial; K as below.
+HARD_FIRST = (256, 1024, 4096)
+#: A cooperative walk's rounds against a serial walk's nodes, at the armadillo's worst point
+#: (bench/cooperative_walk.py: 1,273 nodes in 47 rounds).
+NODES_PER_ROUND = 1273 / 47
+
+
+def hard_first(nodes, wall, ks=HARD_FIRST) -> dict:
+    """A launch's critical path (nodes) if its K hardest prototypes walked cooperatively, for each K of
+    ``ks``: chosen knowing their walks (``oracle_K``), or as those of the shallowest cells (``shallowest_K``:
+    the smallest ``wall``, known before the move: the longest walks start in cells whose centres lie near
+    the surface or outside it); ``nodes`` and ``wall`` (n,) per prototype of the launch."""
+    nodes = np.asarray(nodes)
+    found = {}
+    for rule, order in (("oracle", np.argsort(-nodes, kind="stable")),
+                        ("shallowest", np.argsort(np.asarray(wall)[:len(nodes)], kind="stable"))):
+        for k in ks:
+            rest = np.ones(len(nodes), bool)
+            rest[order[:k]] = False
+            found[f"{rule}_{k}"] = float(max(nodes[rest].max(initial=0), nodes[order[:k]].max(initial=0)
+                                             / NODES_PER_ROUND))
+    return found
+
+
 def count_walks(shape, count, seed, most_points):
     """Pack on numba (one thread) with the converge kernel counting its tree walks."""
     from ndpack.backends import numba_backend, numba_common
@@ -238,13 +263,18 @@ def count_walks(shape, count, seed, most_points):
             launches.append(dict(prototypes=points, steps=len(args[10]), nodes=float(nodes.sum()),
                                  most_nodes=float(nodes.max(initial=0)), most_rounds=float(rounds.max(initial=0)),
                                  cooperative=bool(cooperative), evaluations=float(evaluations.sum()),
-                                 most_evaluations=float(evaluations.max(initial=0))))
+                                 most_evaluations=float(evaluations.max(initial=0)),
+                                 hard_first=None if cooperative else hard_first(nodes, args[5])))
         return result
 
     backend._kernels, backend._run = kernels, run
     started = time.perf_counter()
     packing = nd.pack(shape, count, mode="fast", backend=backend, seed=seed, progress=False)
     seconds = time.perf_counter() - started
+    plain = [launch for launch in launches if launch["hard_first"] is not None]
+    hard = {f"{rule}_{k}": sum(launch["hard_first"][f"{rule}_{k}"] for launch in plain)
+            / max(sum(launch["most_nodes"] for launch in plain), 1e-300)
+            for rule in ("oracle", "shallowest") for k in HARD_FIRST}
     nodes = sum(launch["nodes"] for launch in launches)
     critical = sum(launch["most_nodes"] for launch in launches)
     serial = sum(launch["most_nodes"] for launch in launches if not launch["cooperative"])
@@ -255,6 +285,7 @@ def count_walks(shape, count, seed, most_points):
                 nodes=nodes, evaluations=sum(launch["evaluations"] for launch in launches),
                 critical_path_nodes=critical, mean_path_nodes=nodes / max(prototypes, 1),
                 serial_critical_nodes=serial, cooperative_critical_rounds=rounds,
+                plain_launches=len(plain), hard_first=hard,
                 critical_over_mean=critical / max(sum(launch["nodes"] / max(launch["prototypes"], 1)
                                                       for launch in launches), 1e-300),
                 launches=launches)
@@ -360,6 +391,10 @@ def main():
               f"mean prototype's ({found['seconds']:.1f} s); cooperative on a GPU: "
               f"{found['cooperative_critical_rounds']:,.0f} rounds, and {found['serial_critical_nodes']:,.0f} nodes "
               "in the other launches")
+        print(f"  in the {found['plain_launches']} launches too large to be cooperative, their critical path with the "
+              "K hardest cooperative, knowing the walks / the shallowest cells: " + ", ".join(
+                  f"K={k}: {found['hard_first'][f'oracle_{k}']:.2f} / {found['hard_first'][f'shallowest_{k}']:.2f}"
+                  for k in HARD_FIRST))
     if args.against and "launches" in result and "walks" in result:
         result["against"] = found = against(result, json.loads(args.against.read_text()))
         print(f"against {args.against.name}: same launches per kernel: {found['same_launches']}; the GPU's "

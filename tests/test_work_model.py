@@ -55,6 +55,19 @@ def test_cooperative_rounds_are_counted_beside_the_nodes(work_model):
                                                        if launch["cooperative"])
 
 
+def test_hard_first_puts_the_chosen_walks_in_cooperative_blocks(work_model):
+    """The critical path of a launch whose K hardest prototypes walk cooperatively: the longest of
+    the rest, or the chosen ones' longest over the rounds a cooperative walk saves."""
+    nodes = np.array([10.0, 5000.0, 40.0, 300.0, 20.0])
+    wall = np.array([0.1, 0.9, 0.2, 0.3, 0.0])  # the shallowest cell is not the hardest walk here
+    found = work_model.hard_first(nodes, wall)
+    assert found["oracle_256"] == pytest.approx(5000.0 / work_model.NODES_PER_ROUND)  # every one cooperative
+    assert found["shallowest_256"] == found["oracle_256"]
+    one = work_model.hard_first(nodes, wall, ks=(1,))
+    assert one["oracle_1"] == 300.0  # the hardest out of the way: the next is the path
+    assert one["shallowest_1"] == 5000.0  # the shallowest cell was an easy walk
+
+
 def test_launches_are_counted_per_round(work_model):
     pytest.importorskip("warp")
     found = work_model.count_launches(nd.Box(np.zeros(3), np.ones(3)), 300, seed=0)
