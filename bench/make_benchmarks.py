@@ -236,6 +236,8 @@ SOURCES = {
        for name in ("compile_tiers_h100_issue48_step11.json",
                     *[f"armadillo_100k_h100_warp_issue48_step11tiers_turn{turn}_{version}.json"
                       for turn in (1, 2) for version in ("base", "now")])},
+    "work_model_2core_armadillo_100k_issue48_step11_walks.json": Source(
+        "2 cores", "ebce931", "python bench/work_model.py --mesh armadillo.obj --count 100000 --parts walks"),
     "ahead_fraction_2core.json": Source(
         "2 cores", "1e767cb", "python bench/ahead_tail.py --starts 3e-4 --fractions 0.64 0.512 0.4 --large-seeds 3"),
     "work_model_2core_armadillo_100k_issue48_step7.json": Source(
@@ -526,6 +528,7 @@ def scale_h100() -> list[str]:
     flush11 = {version: [load(f"armadillo_100k_h100_numba_cuda_issue48_step11_turn{turn}_{version}.json")["numba-cuda"]
                          for turn in (1, 2)] for version in ("base", "now")}
     beside11 = load("armadillo_100k_h100_backends_issue48_step11_flush.json")
+    walks11 = load("work_model_2core_armadillo_100k_issue48_step11_walks.json")["walks"]
     step11_files = ["where_h100_warp_issue48_step11.json", "where_h100_numba_cuda_issue48_step11.json",
                     "compile_options_h100_issue48_step11.json",
                     *[f"armadillo_100k_h100_numba_cuda_deallocs{count}_issue48_step11_turn{turn}_now.json"
@@ -533,6 +536,7 @@ def scale_h100() -> list[str]:
                     *[f"armadillo_100k_h100_numba_cuda_issue48_step11_turn{turn}_base.json" for turn in (1, 2)],
                     *[f"armadillo_100k_h100_numba_cuda_issue48_step11_turn{turn}_now.json" for turn in (1, 2)],
                     "armadillo_100k_h100_backends_issue48_step11_flush.json",
+                    "work_model_2core_armadillo_100k_issue48_step11_walks.json",
                     *[f"armadillo_100k_h100_warp_issue48_step11tiers_turn{turn}_{version}.json"
                       for turn in (1, 2) for version in ("base", "now")]]
     arm5_1m = final["armadillo_1m_h100"]["warp"]
@@ -649,7 +653,14 @@ def scale_h100() -> list[str]:
         f"process: numba-cuda {seconds(beside11['numba-cuda']['median'])}, Warp {seconds(beside11['warp']['median'])}, "
         f"numba on the host's 16 cores {seconds(beside11['numba']['median'])} "
         f"({beside11['numba']['median'] / beside11['numba-cuda']['median']:.1f}x, "
-        f"{beside11['numba']['median'] / beside11['warp']['median']:.1f}x). Warp and numba-cuda pack the same spheres "
+        f"{beside11['numba']['median'] / beside11['warp']['median']:.1f}x). The move launches too large to walk "
+        f"cooperatively ({walks11['plain_launches']} in the work model's run on 2 cores) last as long as their slowest "
+        "walk; with the K hardest prototypes in cooperative blocks and the rest alone, their critical path would be "
+        + ", ".join(f"{walks11['hard_first'][f'oracle_{k}']:.2f}" for k in (256, 1024, 4096))
+        + " of today's for K = 256, 1,024, 4,096 where the hardest are known, and "
+        + ", ".join(f"{walks11['hard_first'][f'shallowest_{k}']:.2f}" for k in (256, 1024, 4096))
+        + " where they are guessed as the prototypes of the shallowest cells (known before the move): the next "
+        "step's candidate. Warp and numba-cuda pack the same spheres "
         "since the tenth step (the kernels written once); that step's paragraph and the eighth's (numba-cuda's "
         "cooperative walk) are in the history. Warp's peak memory at a million (seventh step): the armadillo "
         f"{int(peak7['armadillo']):,} MiB, the cube {int(peak7['cube']):,} MiB.",
