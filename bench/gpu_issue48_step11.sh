@@ -12,6 +12,9 @@
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step11.sh flush  numba-cuda, this checkout (the store frees
 #        where its stream is idle) against .gpu2/base in turns, their spheres side by side; then numba-cuda, Warp
 #        and numba on the host's cores in one process; the device store's tests
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step11.sh million  a million spheres in the armadillo, the cube
+#        and the square on Warp and numba-cuda (medians of 2), and Warp's peak GPU memory for the armadillo and the
+#        cube (bench/gpu_issue48_step5.sh memory)
 #   Warp's level 3 built in a background process while a first packing runs at 2: kept aside at 1fbb251 (not on
 #        main), with its modes tiers and turns in that commit's copy of this script.
 # The files gather in one archive under $OUT (a run brings back few files).
@@ -63,5 +66,16 @@ case "${1:-}" in
       2>&1 | tail -4 | tee "$OUT/gpu_tests_${CARD}_issue48_${STEP}.txt"
     tar czf "$FINAL/flush_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step11.sh where|levels|deallocs|flush" >&2; exit 2 ;;
+  million)
+    gather_in million
+    kernels now "armadillo_1m_${CARD}_backends_issue48_${STEP}" --backends warp numba-cuda --mesh /tmp/armadillo.obj \
+      --count 1000000 --repeats 2 | grep -E "^== |now: "
+    kernels now "cube_1m_${CARD}_backends_issue48_${STEP}" --backends warp numba-cuda --count 1000000 --repeats 2 \
+      | grep -E "^== |now: "
+    kernels now "square_1m_${CARD}_backends_issue48_${STEP}" --backends warp numba-cuda --square --count 1000000 \
+      --repeats 2 | grep -E "^== |now: "
+    STEP=$STEP bash bench/gpu_issue48_step5.sh memory
+    tar czf "$FINAL/million_${CARD}_issue48_${STEP}.tgz" -C $OUT .
+    ;;
+  *) echo "usage: bash bench/gpu_issue48_step11.sh where|levels|deallocs|flush|million" >&2; exit 2 ;;
 esac

@@ -236,6 +236,9 @@ SOURCES = {
        for name in ("compile_tiers_h100_issue48_step11.json",
                     *[f"armadillo_100k_h100_warp_issue48_step11tiers_turn{turn}_{version}.json"
                       for turn in (1, 2) for version in ("base", "now")])},
+    **{f"{case}_1m_h100_backends_issue48_step11_now.json": Source(
+        "H100", "a89e925", "bash bench/gpu_issue48_step11.sh million", "2026-11-28")
+       for case in ("armadillo", "cube", "square")},
     "work_model_2core_armadillo_100k_issue48_step11_walks.json": Source(
         "2 cores", "ebce931", "python bench/work_model.py --mesh armadillo.obj --count 100000 --parts walks"),
     "ahead_fraction_2core.json": Source(
@@ -510,11 +513,12 @@ def scale_h100() -> list[str]:
     # Issue 48's seventh step, its second lease (STEP=step7b final): the million rows' Warp and numba.
     final = {name: load(f"{name}_issue48_step7b_now.json") for name in (
         "armadillo_1m_h100", "cube_1m_h100", "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")}
-    # Issue 48's eighth step (numba-cuda's cooperative walk), one H100 lease with NumPy 2.4 carried.
-    backends8 = load("armadillo_100k_h100_backends_issue48_step8b_now.json")  # the three backends in one process
-    arm5, arm5_cuda, arm5_cpu = backends8["warp"], backends8["numba-cuda"], backends8["numba"]
-    million_cuda = {case: load(f"{case}_1m_h100_backends_issue48_step8_now.json")
-                    for case in ("armadillo", "cube", "square")}
+    # Issue 48's eleventh step, one H100 lease with NumPy 2.4 carried: the three backends in one process at
+    # 100,000; Warp and numba-cuda at a million on the next lease.
+    backends11 = load("armadillo_100k_h100_backends_issue48_step11_flush.json")
+    arm5, arm5_cuda, arm5_cpu = backends11["warp"], backends11["numba-cuda"], backends11["numba"]
+    million11 = {case: load(f"{case}_1m_h100_backends_issue48_step11_now.json")
+                 for case in ("armadillo", "cube", "square")}
     # Issue 48's eleventh step: where the time goes, Warp's levels, numba-cuda's frees.
     where11 = {backend: load(f"where_h100_{backend}_issue48_step11.json")[backend.replace("_", "-")]
                for backend in ("warp", "numba_cuda")}
@@ -530,6 +534,7 @@ def scale_h100() -> list[str]:
     beside11 = load("armadillo_100k_h100_backends_issue48_step11_flush.json")
     walks11 = load("work_model_2core_armadillo_100k_issue48_step11_walks.json")["walks"]
     step11_files = ["where_h100_warp_issue48_step11.json", "where_h100_numba_cuda_issue48_step11.json",
+                    "armadillo_100k_h100_backends_issue48_step11_where.json",
                     "compile_options_h100_issue48_step11.json",
                     *[f"armadillo_100k_h100_numba_cuda_deallocs{count}_issue48_step11_turn{turn}_now.json"
                       for count in (10, 1000000) for turn in (1, 2)],
@@ -539,17 +544,13 @@ def scale_h100() -> list[str]:
                     "work_model_2core_armadillo_100k_issue48_step11_walks.json",
                     *[f"armadillo_100k_h100_warp_issue48_step11tiers_turn{turn}_{version}.json"
                       for turn in (1, 2) for version in ("base", "now")]]
-    arm5_1m = final["armadillo_1m_h100"]["warp"]
     cube_1m, cube_1m_cpu = final["cube_1m_h100"]["warp"], final["cube_1m_h100host_numba"]["numba"]
     square_1m, square_1m_cpu = final["square_1m_h100"]["warp"], final["square_1m_h100host_numba"]["numba"]
-    peak7 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
-                            (RESULTS / "memory_h100_issue48_step7b.txt").read_text()))
+    peak11 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
+                             (RESULTS / "memory_h100_issue48_step11.txt").read_text()))
     step7_files = ["profile_kernels_h100_armadillo_issue48_step7.json"]
     step7_files += [f"{name}_issue48_step7b_now.json" for name in final]
     step7_files += ["work_model_2core_armadillo_100k_issue48_step7.json"]
-    # The table's numba-cuda column (the eighth step's paragraph is in the history).
-    step8_files = [*[f"{case}_1m_h100_backends_issue48_step8_now.json" for case in ("armadillo", "cube", "square")],
-                   "armadillo_100k_h100_backends_issue48_step8b_now.json"]
 
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
     before = load("profile_kernels_h100_armadillo_issue48_before.json")["warp"]
@@ -558,8 +559,8 @@ def scale_h100() -> list[str]:
     fill = {(row["shape"], row["run"]): row["fill"] for row in load("policy_fill_2core_10k.json")["rows"]}
 
 
-    def cuda_1m(case):
-        return seconds(million_cuda[case]["numba-cuda"]["median"])
+    def now_1m(case, backend):
+        return seconds(million11[case][backend]["median"])
 
     def parts(run):
         stages, device = run["stages"], run["device"]
@@ -574,15 +575,16 @@ def scale_h100() -> list[str]:
              for name, old, new7, model7_ in zip(names, parts(before), parts(arm7_profiled), guess7)]
     rows = [
         ["armadillo (100k triangles)", "100,000", seconds(arm5["median"]), seconds(arm5_cuda["median"]),
-         seconds(arm5_cpu["median"]), f"{arm5['fill']:.4f}", "medians of 3, 640ce8f (NumPy 2.4)"],
+         seconds(arm5_cpu["median"]), f"{arm5['fill']:.4f}", "medians of 3, a89e925 (NumPy 2.4)"],
         ["unit cube", "100,000", *[seconds(median_of(cube, backend=b)) for b in ("warp", "numba-cuda", "numba")],
          f"{median_of(cube, 'fill', backend='warp'):.4f}", "medians of 2, 4ea141e"],
-        ["armadillo (100k triangles)", "1,000,000", seconds(arm5_1m["median"]), cuda_1m("armadillo"), "",
-         f"{arm5_1m['fill']:.4f}", "median of 2, 1e767cb (numba-cuda: 640ce8f, another lease)"],
-        ["unit cube", "1,000,000", seconds(cube_1m["median"]), cuda_1m("cube"), seconds(cube_1m_cpu["median"]),
-         f"{cube_1m['fill']:.4f}", "median of 2 (numba: 1), 1e767cb (numba-cuda: 640ce8f)"],
-        ["unit square", "1,000,000", seconds(square_1m["median"]), cuda_1m("square"), seconds(square_1m_cpu["median"]),
-         f"{square_1m['fill']:.4f}", "median of 2 (numba: 1), 1e767cb (numba-cuda: 640ce8f)"],
+        ["armadillo (100k triangles)", "1,000,000", now_1m("armadillo", "warp"), now_1m("armadillo", "numba-cuda"), "",
+         f"{million11['armadillo']['warp']['fill']:.4f}", "medians of 2, a89e925"],
+        ["unit cube", "1,000,000", now_1m("cube", "warp"), now_1m("cube", "numba-cuda"), seconds(cube_1m_cpu["median"]),
+         f"{million11['cube']['warp']['fill']:.4f}", "medians of 2, a89e925 (numba: one run, 1e767cb)"],
+        ["unit square", "1,000,000", now_1m("square", "warp"), now_1m("square", "numba-cuda"),
+         seconds(square_1m_cpu["median"]), f"{million11['square']['warp']['fill']:.4f}",
+         "medians of 2, a89e925 (numba: one run, 1e767cb)"],
         ["unit cube", "10,000,000", seconds(warp_10m["seconds"]), "", "", f"{warp_10m['fill']:.4f}",
          "one run, e7f6fee"],
     ]
@@ -595,14 +597,15 @@ def scale_h100() -> list[str]:
         "",
         "Fast mode, seed 0: seconds of the whole `nd.pack` call, the final float64 check included, the compile apart",
         "(a warm-up packing first). numba-cuda needs NumPy 2.4, carried to the GPU machine (its image's 2.5 breaks "
-        "numba-cuda's CUDA target): it was not run from 3ffe337 to 9d800f2. numba-cuda's figures at a million are of "
-        "another lease than Warp's (beside Warp's there: below).",
+        "numba-cuda's CUDA target): it was not run from 3ffe337 to 9d800f2. The GPUs' figures at a million are of the "
+        "lease after the 100,000's; numba's at a million of an earlier one, beside Warp's of then.",
         "",
         *table(head, rows),
         f"Warp is {arm5_cpu['median'] / arm5['median']:.1f}x the host's 16 cores on the armadillo at "
         f"100,000 (numba-cuda {arm5_cpu['median'] / arm5_cuda['median']:.1f}x), "
         f"{cube_1m_cpu['median'] / cube_1m['median']:.1f}x on the cube and "
-        f"{square_1m_cpu['median'] / square_1m['median']:.1f}x on the square at a million (goals: 5x; 1 s, 8 s, 5 s). "
+        f"{square_1m_cpu['median'] / square_1m['median']:.1f}x on the square at a million (1e767cb's Warp, "
+        f"{seconds(cube_1m['median'])} and {seconds(square_1m['median'])}, in numba's run; goals: 5x; 1 s, 8 s, 5 s). "
         f"A GPU's fast mode fills at 10,000 spheres this fraction of the faithful mode's: {policy}.",
         "",
         "The armadillo at 100,000 by stage (each ends with a device sync) before issue 48 and at its seventh step "
@@ -662,9 +665,12 @@ def scale_h100() -> list[str]:
         + " where they are guessed as the prototypes of the shallowest cells (known before the move): the next "
         "step's candidate. Warp and numba-cuda pack the same spheres "
         "since the tenth step (the kernels written once); that step's paragraph and the eighth's (numba-cuda's "
-        "cooperative walk) are in the history. Warp's peak memory at a million (seventh step): the armadillo "
-        f"{int(peak7['armadillo']):,} MiB, the cube {int(peak7['cube']):,} MiB.",
-        *sources(*step11_files, *step8_files, *step7_files, "round_time_h100_cube_issue20_step7.json",
+        "cooperative walk) are in the history. Warp's peak GPU memory at a million: the armadillo "
+        f"{int(peak11['armadillo']):,} MiB, the cube {int(peak11['cube']):,} MiB "
+        "([output](../bench/results/memory_h100_issue48_step11.txt)).",
+        *sources(*step11_files, *[f"{case}_1m_h100_backends_issue48_step11_now.json"
+                                  for case in ("armadillo", "cube", "square")],
+                 *step7_files, "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
                  "policy_fill_2core_10k.json"),
     ]
