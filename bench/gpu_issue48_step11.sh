@@ -15,8 +15,10 @@
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step11.sh million  a million spheres in the armadillo, the cube
 #        and the square on Warp and numba-cuda (medians of 2), and Warp's peak GPU memory for the armadillo and the
 #        cube (bench/gpu_issue48_step5.sh memory)
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step11.sh level-turns  Warp at levels 2 and 3 in turns, every
+#        launch timed (bench/profile_kernels.py --warp-level)
 #   Warp's level 3 built in a background process while a first packing runs at 2: kept aside at 1fbb251 (not on
-#        main), with its modes tiers and turns in that commit's copy of this script.
+#        main), with its modes tiers and turns in that commit's copy of this script (the turns: level-turns here).
 # The files gather in one archive under $OUT (a run brings back few files).
 set -uo pipefail
 source bench/gpu_header.sh
@@ -37,6 +39,20 @@ case "${1:-}" in
   levels)
     timeout 560 python3 bench/compile_options.py --mesh /tmp/armadillo.obj --variants ndpack O3 ndpack O3 --count 100000 \
       --repeats 3 --out "$OUT/compile_options_${CARD}_issue48_${STEP}.json" 2>&1 | grep -v "^Warp\|^Module" | tail -30
+    ;;
+  level-turns)
+    # Warp at ndpack's level and at 3 in turns, every launch timed once, then 3 runs unprofiled (what 1fbb251's
+    # turns measured with its background build).
+    gather_in level-turns
+    for turn in 1 2; do
+      for level in 2 3; do
+        timeout 200 python3 bench/profile_kernels.py --backends warp --mesh /tmp/armadillo.obj --count 100000 \
+          --repeats 3 --stages --warp-level $level --spheres "/tmp/armadillo_warp_level$level.npz" \
+          --out "$OUT/armadillo_100k_${CARD}_warp_level${level}_issue48_${STEP}_turn${turn}.json" 2>&1 \
+          | grep -E "^== |move_ids|cell_distances|device kernels|now: "
+      done
+    done
+    tar czf "$FINAL/level_turns_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
   deallocs)
     gather_in deallocs
@@ -77,5 +93,5 @@ case "${1:-}" in
     STEP=$STEP bash bench/gpu_issue48_step5.sh memory
     tar czf "$FINAL/million_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step11.sh where|levels|deallocs|flush|million" >&2; exit 2 ;;
+  *) echo "usage: bash bench/gpu_issue48_step11.sh where|levels|level-turns|deallocs|flush|million" >&2; exit 2 ;;
 esac

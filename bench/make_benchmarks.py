@@ -231,8 +231,8 @@ SOURCES = {
         "armadillo_100k_h100_numba_cuda_issue48_step11_turn1_now.json",
         "armadillo_100k_h100_numba_cuda_issue48_step11_turn2_now.json",
         "armadillo_100k_h100_backends_issue48_step11_flush.json")},
-    **{name: Source("H100", "1fbb251", "git checkout 1fbb251 && bash bench/gpu_issue48_step11.sh tiers; ... turns",
-                    "2026-11-28")
+    **{name: Source("H100", "1fbb251", "git checkout 1fbb251 && bash bench/gpu_issue48_step11.sh tiers; ... turns "
+                    "(on main: bash bench/gpu_issue48_step11.sh level-turns)", "2026-11-28")
        for name in ("compile_tiers_h100_issue48_step11.json",
                     *[f"armadillo_100k_h100_warp_issue48_step11tiers_turn{turn}_{version}.json"
                       for turn in (1, 2) for version in ("base", "now")])},

@@ -1,7 +1,7 @@
 """Where a fast-mode packing's time goes, by device kernel and by driver phase.
 
     python bench/profile_kernels.py --backends warp numba-cuda --count 100000 [--mesh armadillo.obj]
-        [--variants now no-ahead] [--repeats 2] [--host-profile] [--stages] [--spheres now.npz]
+        [--variants now no-ahead] [--repeats 2] [--host-profile] [--stages] [--spheres now.npz] [--warp-level 3]
 
 Every kernel launch of the device store is made synchronous and timed (so its time is the
 device's, launch included; copies queued before it are waited for first, and not counted).
@@ -220,7 +220,14 @@ def main():
     parser.add_argument("--spheres", default=None,
                         help="save the first variant's last unprofiled packing here (.npz: centers, radii), "
                              "to set beside another checkout's")
+    parser.add_argument("--warp-level", type=int, default=None,
+                        help="Warp's CUDA optimisation level for ndpack's modules (kernels.compile.WARP_OPTIMIZATION; "
+                             "default ndpack's)")
     args = parser.parse_args()
+    if args.warp_level is not None:  # before any module is made: the level is part of its text
+        from ndpack.kernels import compile as kernel_compile
+
+        kernel_compile.WARP_OPTIMIZATION = args.warp_level
     dim = 2 if args.square else 3
     shape = nd.TriangleMesh.load(args.mesh) if args.mesh else nd.Box(np.zeros(dim), np.ones(dim))
     results = {}

@@ -64,8 +64,8 @@ TYPICAL_SECONDS = {"numba": 10, "numba-cuda": 20, "warp": 6, "warp on a GPU": 4}
 #: off; bench/compile_options.py, docs/benchmarks.md). With the kernels written once (issue 48's
 #: eleventh step), level 3 compiles the two modules in 12 s and 9 s against 4 s and 3 s, and its
 #: kernels are faster by 3% (the move) to 22% (the cells' distances), the packing by about 2%
-#: (``bash bench/gpu_issue48_step11.sh levels``; ``turns`` at 1fbb251, which built level 3 in the
-#: background): not worth three times the first compile, nor a background build.
+#: (``bash bench/gpu_issue48_step11.sh levels`` and ``level-turns``; measured at 1fbb251, which built
+#: level 3 in the background): not worth three times the first compile, nor a background build.
 WARP_OPTIMIZATION = 2
 #: Generated modules start with this line, then what they hold (``ndpack backends`` lists them).
 TITLE = "# ndpack kernels: "
