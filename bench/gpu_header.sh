@@ -40,6 +40,18 @@ kernels() {
     --out "$OUT/${name}_${version}.json" "$@" 2>&1 | grep -v "^Warp\|^Module"
 }
 
+# in_turns NAME CASE ARGS...: kernels of .gpu2/base and of this checkout in two turns (NAME_turnN_VERSION.json),
+# each saving its spheres to /tmp/CASE_VERSION.npz for same_spheres; the stages' lines shown.
+in_turns() {
+  local name=$1 case=$2
+  shift 2
+  for turn in 1 2; do
+    for version in base now; do
+      kernels "$version" "${name}_turn${turn}" "$@" --spheres "/tmp/${case}_${version}.npz" | grep -E "^== |now: "
+    done
+  done
+}
+
 # same_spheres FILE CASE...: each case's spheres of .gpu2/base and of this checkout (/tmp/CASE_base.npz and
 # /tmp/CASE_now.npz, written by kernels --spheres) side by side, to FILE and the screen: their counts, the
 # largest change of a radius and of a centre, and their volumes (sums of radius^3).

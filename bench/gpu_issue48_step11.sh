@@ -68,13 +68,8 @@ case "${1:-}" in
   flush)
     need_base flush
     gather_in flush
-    for turn in 1 2; do
-      for version in base now; do
-        kernels "$version" "armadillo_100k_${CARD}_numba_cuda_issue48_${STEP}_turn${turn}" --backends numba-cuda \
-          --mesh /tmp/armadillo.obj --count 100000 --repeats 3 --spheres "/tmp/armadillo_numba-cuda_${version}.npz" \
-          | grep -E "^== |now: "
-      done
-    done
+    in_turns "armadillo_100k_${CARD}_numba_cuda_issue48_${STEP}" armadillo_numba-cuda --backends numba-cuda \
+      --mesh /tmp/armadillo.obj --count 100000 --repeats 3
     same_spheres "$OUT/same_spheres_${CARD}_issue48_${STEP}.txt" armadillo_numba-cuda
     kernels now "armadillo_100k_${CARD}_backends_issue48_${STEP}" --backends numba-cuda warp numba \
       --mesh /tmp/armadillo.obj --count 100000 --repeats 3 | grep -E "^== |now: "
