@@ -8,8 +8,11 @@ a child process whose caches are all new and empty (ndpack's and Numba's, Warp's
 the CUDA driver's), which times ``import ndpack``, loading the mesh (its tree, and its queries'
 compile for the sign check), the first ``nd.pack`` (``--count`` spheres, fast mode: the kernels'
 compile, the final check's compile, the packing) and a second one in the same process (what is not
-compile), and reads back the compile times ndpack recorded, by title. ``whole_s`` is import, load
-and first packing: the time from the command to the spheres.
+compile), and reads back the compile times ndpack recorded, by title (a compile helper's,
+:mod:`ndpack.compile_ahead`, among them: what the helper took, not what the packing waited), and
+the compilations made in the child itself (``compiled_here``: the generated modules' kernels that
+no helper compiled). ``whole_s`` is import, load and first packing: the time from the command to
+the spheres.
 """
 
 from __future__ import annotations
@@ -40,12 +43,14 @@ def child(mesh: str, backend: str, count: int) -> None:
         started = time.perf_counter()
         packing = nd.pack(shape, count, backend=backend, mode="fast", seed=0, progress=False)
         runs.append(time.perf_counter() - started)
+    from ndpack.kernels.compile import COMPILES
+
     times_file = cache_root() / "compile-times.json"
     compile_times = json.loads(times_file.read_text()) if times_file.exists() else {}
     print(json.dumps({"backend": backend, "import_s": round(imported, 2), "load_s": round(loaded, 2),
                       "first_packing_s": round(runs[0], 2), "next_packing_s": round(runs[1], 2),
                       "whole_s": round(imported + loaded + runs[0], 2), "spheres": len(packing.radii),
-                      "compile_times": compile_times}))
+                      "compile_times": compile_times, "compiled_here": dict(COMPILES)}))
 
 
 def main(argv=None) -> None:

@@ -17,7 +17,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / "ndpack"
 #: Bottom to top: a module may import from its own layer or any layer below it.
 LAYERS = (
     # Errors, notices, machine-independent arithmetic, and geometry with no shape in it.
-    ("base", ("ndpack.errors", "ndpack.log", "ndpack.reproducible", "ndpack.parallel", "ndpack.geometry")),
+    ("base", ("ndpack.errors", "ndpack.log", "ndpack.reproducible", "ndpack.parallel", "ndpack.compile_ahead",
+              "ndpack.geometry")),
     # The scalar-kernel language, programs, the tape, the library, compiling, compiled_program.
     ("kernels", ("ndpack.kernels",)),
     ("meshes", ("ndpack.meshes",)),

@@ -9,11 +9,9 @@ compiled.
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 
+from .. import compile_ahead as ahead
 from ..kernels.compile import numba_namespace
 from ..kernels.portable import render
 from ..kernels.tape import interpreter
@@ -95,43 +93,31 @@ def program_kernels(program):
 
 def geometry_kernels(dim, wait: bool = True):
     """The shape-free kernels (near_spheres, touched) for dimension ``dim``: those of the tape
-    interpreter's namespace, which the shapes of built-ins share. Where a second process is
+    interpreter's namespace, which the shapes of built-ins share. Where a helper process is
     compiling them (:func:`compile_geometry_beside`), waits for it first (unless not ``wait``)."""
-    helper = _helpers.get(dim)
-    if wait and helper is not None:
-        _helpers[dim] = None
-        try:
-            helper.wait(timeout=900)
-        except subprocess.TimeoutExpired:  # compile here then; the helper's cache entries are never half-written
-            helper.kill()
+    if wait:
+        ahead.wait(_geometry_job(dim))
     return program_kernels(interpreter(dim))
 
 
 #: The shape-free entry points every packing calls.
 GEOMETRY_ENTRIES = ("index_query", "touched_all", "index_insert_range")
-_helpers = {}  # dim -> the process compiling them, or None
+_asked: set[int] = set()  # the dimensions compile_geometry_beside has looked at
+
+
+def _geometry_job(dim: int) -> str:
+    return f"numba: the shape-free kernels of {int(dim)}-D"
 
 
 def compile_geometry_beside(dim: int) -> None:
     """Where this machine has not compiled the shape-free kernels of ``dim`` yet, compile them in
-    a second process while this one compiles the shape's: a first packing then waits for two
-    compilers side by side, not one after the other (a first ``ndpack pack`` on 2 cores: 17 s ->
-    12 s, docs/benchmarks.md "Start-up"). Numba's disk cache hands the result over."""
-    if dim in _helpers:
+    a helper process while this one compiles the shape's (:mod:`ndpack.compile_ahead`): a first
+    packing then waits for two compilers side by side, not one after the other (a first ``ndpack
+    pack`` on 2 cores: 17 s -> 12 s, docs/benchmarks.md "Start-up"). Numba's disk cache hands the
+    result over."""
+    if dim in _asked:
         return
-    _helpers[dim] = None
+    _asked.add(dim)
     namespace = geometry_kernels(dim, wait=False)
-    if (os.cpu_count() or 1) < 2 or all(_on_disk(namespace[name]) for name in GEOMETRY_ENTRIES):
-        return
-    command = f"from ndpack.backends.numba_backend import warm_geometry; warm_geometry({int(dim)})"
-    try:
-        _helpers[dim] = subprocess.Popen([sys.executable, "-c", command], stdin=subprocess.DEVNULL,
-                                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    except OSError:  # no second process here: this one compiles them when they are first used
-        pass
-
-
-def _on_disk(dispatcher) -> bool:
-    """Whether Numba's disk cache holds compiled code of ``dispatcher`` (unknown: True)."""
-    index = getattr(getattr(getattr(dispatcher, "_cache", None), "_cache_file", None), "_index_path", None)
-    return index is None or os.path.exists(index)
+    if not all(ahead.on_disk(namespace[name]) for name in GEOMETRY_ENTRIES):
+        ahead.start([(_geometry_job(dim), 1.0, "ndpack.backends.numba_backend:warm_geometry", [int(dim)])])

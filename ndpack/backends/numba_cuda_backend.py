@@ -17,14 +17,18 @@ Without a GPU, set ``NUMBA_ENABLE_CUDASIM=1`` to run the same kernels in Numba's
 
 from __future__ import annotations
 
+import ast
 import weakref
+from pathlib import Path
 
 import numpy as np
 
 from ..errors import BackendError
-from ..kernels.compile import CudaKernel, cuda_device_function, numba_namespace
+from .. import compile_ahead
+from ..kernels.compile import (CudaKernel, announce_cuda, cuda_device_function, cuda_title,
+                               import_generated_again, numba_namespace)
 from ..kernels.compiled import compiled_program
-from ..kernels.portable import kernel_names, render
+from ..kernels.portable import kernel_argument_types, kernel_names, render
 from ..kernels.tape import interpreter
 from .base import Backend, staging_rows, tightened_reach
 from .device_spheres import DeviceSpheres
@@ -58,6 +62,19 @@ def move_ids(ids, first, first_rows, tries, stream, points, clearance, polished,
                        wall, prm, centers, radii, nbr, steps, h, polish, polish_steps, polish_low, polish_from)
 '''
 ENTRY_NAMES = ("move_ids", *kernel_names(STORE_TEXT))
+#: The move launch's argument types, named as the store's kernels' annotations
+#: (:data:`ndpack.kernels.portable.ARGUMENT_TYPES`): its text is numba-cuda's own, unannotated.
+MOVE_ENTRY_TYPES = ("ints", "points", "int", "int", "u64", "points", "floats", "ints", "points", "points",
+                    "floats", "floats", "points", "floats", "int_table", "floats", "float", "int", "int", "floats",
+                    "float", "int")
+#: Every entry point's argument types, in order: the signature a compile helper compiles it for
+#: (:func:`compile_kernels`), the one its launches give it (tests/backends/test_compile_ahead.py).
+ENTRY_TYPES = {"move_ids": MOVE_ENTRY_TYPES, **kernel_argument_types(STORE_TEXT)}
+#: How long each entry point takes to compile, relatively (a fresh H100 host's first launches of a
+#: mesh's kernels, 0.4-5 s: bench/results/cuda_compile_h100_issue48_step9_now.json; cell_distances
+#: walks the mesh as clearance_all does); the others about 0.1 s. The helpers share them by it.
+COMPILE_WEIGHTS = {"move_ids": 5.0, "clearance_all": 3.9, "cell_distances": 3.0, "index_bound_ids": 1.9,
+                   "index_fill_ids": 0.6, "touched_index_select": 0.4}
 #: Threads of a block in the one-thread-per-item launches; never LANES, which marks a cooperative launch.
 THREADS_PER_BLOCK = 128
 #: NVVM's optimisation of the kernels (numba-cuda's ``opt``; Numba's default is on). Off, a fresh H100's
@@ -128,12 +145,7 @@ class NumbaCudaBackend(Backend):
         )
 
     def _jit(self, namespace, names):
-        cuda = self.cuda
-        for name in names:
-            if name in ENTRY_NAMES:  # kept on disk, with the device functions compiled into them
-                namespace[name] = CudaKernel(cuda.jit(cache=True, opt=CUDA_OPT)(namespace[name]))
-            else:
-                namespace[name] = cuda_device_function(namespace[name])
+        _jit_entries(self.cuda, namespace, names)
 
     def _kernels(self, shape):
         """The compiled namespace that runs ``shape``, its numbers on the device and its
@@ -141,14 +153,35 @@ class NumbaCudaBackend(Backend):
         flat = compiled_program(shape)
         if shape not in self._params:
             self._params[shape] = self.cuda.to_device(flat.params)
-        return self._program_kernels(flat.program), self._params[shape], FD_STEP * shape.scale
+        return self._program_kernels(flat.program, ahead=True), self._params[shape], FD_STEP * shape.scale
 
-    def _program_kernels(self, program):
+    def _program_kernels(self, program, ahead=False):
+        """The compiled namespace of ``program``; the first time, with ``ahead``, its entry points
+        that Numba's disk cache lacks go to compile helpers (:meth:`_compile_ahead`)."""
         if id(program) not in self._namespaces:
             source = program.source("cuda")  # rendered once here (numba_namespace renders its own)
-            namespace = numba_namespace(program, "cuda", kernels_text(source, self._simulator), self._jit)
+            text = kernels_text(source, self._simulator)
+            namespace = numba_namespace(program, "cuda", text, self._jit)
             self._namespaces[id(program)] = (program, namespace, has_walk(source))
+            if ahead and not self._simulator:
+                self._compile_ahead(program, namespace, text)
         return self._namespaces[id(program)][1]
+
+    def _compile_ahead(self, program, namespace, text):
+        """Where this machine has not compiled ``namespace``'s entry points yet, compile them in
+        helper processes side by side (:mod:`ndpack.compile_ahead`; from 3 helpers up, since one
+        would compile them one after the other as this process would), each of its first launch
+        then waiting for its helper and loading it from Numba's disk cache."""
+        missing = [name for name in ENTRY_TYPES if not namespace[name]._cached()]
+        digest = Path(namespace["__file__"]).stem.removeprefix("ndpack_")
+        backend_names = [node.name for node in ast.parse(text).body if isinstance(node, ast.FunctionDef)]
+        jobs = [(f"numba-cuda {digest} {name}", COMPILE_WEIGHTS.get(name, 0.1), f"{__name__}:compile_kernels",
+                 [digest, list(program.kernels), backend_names, {name: list(ENTRY_TYPES[name])}, self.device])
+                for name in missing]
+        if len(missing) > 1 and compile_ahead.start(jobs, least=3):
+            announce_cuda(cuda_title(namespace))
+            for (key, *_), name in zip(jobs, missing):
+                namespace[name].ahead = key
 
     def _walks(self, shape) -> bool:
         """Whether ``shape``'s kernels walk a tree (and so have a cooperative walk)."""
@@ -230,6 +263,56 @@ class NumbaCudaBackend(Backend):
         self._launch(namespace["touched_all"], len(points), to(_f64(points)), to(_f64(clearance)),
                      to(_f64(new_centers)), to(_f64(new_radii)), out)
         return out.copy_to_host()
+
+
+_helper_namespaces: dict[str, dict] = {}  # in a compile helper: digest -> the namespace it compiles
+
+
+def _jit_entries(cuda, namespace, names):
+    """The backend's functions ``names`` of ``namespace`` jitted in place: the entry points as
+    kernels kept on disk (with the device functions compiled into them), the others as device
+    functions."""
+    for name in names:
+        if name in ENTRY_NAMES:
+            namespace[name] = CudaKernel(cuda.jit(cache=True, opt=CUDA_OPT)(namespace[name]))
+        else:
+            namespace[name] = cuda_device_function(namespace[name])
+
+
+def compile_kernels(digest: str, program_names: list[str], backend_names: list[str],
+                    kernels: dict[str, list[str]], device: int = 0) -> None:
+    """A compile helper's job (:mod:`ndpack.compile_ahead`): the entry points ``kernels`` (name ->
+    argument types, as :data:`ENTRY_TYPES`) of the generated module ``digest``, compiled for GPU
+    ``device`` into Numba's disk cache, the module jitted as :func:`numba_namespace` jits it for
+    :class:`NumbaCudaBackend` (``program_names``: the program's functions, ``backend_names``:
+    the backend's)."""
+    from numba import cuda
+
+    from ..kernels.compile import _checked_disk_caches
+
+    if digest not in _helper_namespaces:
+        cuda.select_device(int(device))
+        namespace = import_generated_again(digest).__dict__
+        for name in program_names:
+            namespace[name] = cuda_device_function(namespace[name])
+        _jit_entries(cuda, namespace, backend_names)
+        _checked_disk_caches(namespace)
+        _helper_namespaces[digest] = namespace
+    namespace = _helper_namespaces[digest]
+    for name, kinds in kernels.items():
+        namespace[name].kernel.compile(tuple(numba_type(kind) for kind in kinds))
+
+
+def numba_type(kind: str):
+    """Numba's type of a launch argument of portable type ``kind``, as this backend passes it:
+    C-contiguous float64 and int64 arrays, Python ints and floats, a NumPy uint64."""
+    from numba.core import types
+
+    arrays = {"floats": (types.float64, 1), "points": (types.float64, 2), "ints": (types.int64, 1),
+              "int_table": (types.int64, 2)}
+    if kind in arrays:
+        return types.Array(*arrays[kind], "C")
+    return {"int": types.int64, "float": types.float64, "u64": types.uint64, "bool": types.boolean}[kind]
 
 
 class _CudaDevice:

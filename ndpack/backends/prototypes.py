@@ -690,7 +690,7 @@ class DevicePrototypes(Prototypes):
     def window(self, fraction, most=None, late=None):
         # The kernels take the window below a positive frontier only, at least ``low``: nothing is
         # selected at a run's end, when no clearance is positive.
-        low = np.finfo(np.float32).tiny
+        low = float(np.finfo(np.float32).tiny)  # a Python float: the kernels compile for float64 (ENTRY_TYPES)
         if late is None:
             ids, clearance, points, polished, top = self._select(low=low, relative=fraction, most=most)
             return ids, clearance, points, polished != 0, top, top

@@ -39,6 +39,8 @@ import math
 
 import numpy as np
 
+from .. import compile_ahead as ahead
+
 #: A pair is listed within this factor of the distance at which it meets: far above the rounding
 #: of a distance or a sum of radii (2**-52 of themselves), so no pair that meets is left out.
 WIDEN = 1.0 + 2.0**-30
@@ -131,10 +133,36 @@ def _listed(run, room):
     return first[:found], second[:found]
 
 
+#: The compile helper's job that compiles the grid's kernels (:func:`compile_ahead`).
+AHEAD_JOB = "numba: the conflict check's grid"
+
+
+def compile_ahead() -> None:
+    """Where Numba's disk cache lacks the grid's kernels, start a helper process compiling them
+    (:mod:`ndpack.compile_ahead`): a first packing's conflict check then waits for it, if at all,
+    instead of compiling them. Only where two helpers may start: on 2 cores the one helper is
+    better spent on the packing's shape-free kernels (a first packing of the armadillo took 34.7 s
+    against 31.1 s when this one took it; ``bench/fresh_machine.py``)."""
+    if not ahead.function_on_disk(_around):
+        ahead.start([(AHEAD_JOB, 2.5, f"{__name__}:warm_up", [])], least=2)
+
+
+def warm_up() -> None:
+    """Compile (or load) the grid's kernels by running them on a few spheres, with the argument
+    types a packing's conflict check passes: the compile helper's job."""
+    rng = np.random.default_rng(0)
+    found = grid(rng.random((50, 3)), np.full(50, 0.04), 0.0, 0.04)
+    ids = np.arange(3, dtype=np.int64)
+    found.pairs()
+    found.pairs_with(ids)
+    found.count_near(ids, 0.1, 10)
+
+
 @functools.cache
 def _kernels():
     """``_build``, ``_scan`` and ``_around`` compiled by Numba (imported at the first check, so
-    ``import ndpack`` stays light)."""
+    ``import ndpack`` stays light), or loaded from disk where a compile helper compiled them."""
+    ahead.wait(AHEAD_JOB)
     import numba
 
     from ..log import numba_functions

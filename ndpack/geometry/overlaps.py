@@ -40,6 +40,7 @@ import math
 
 import numpy as np
 
+from .. import compile_ahead as ahead
 from ..parallel import run_in_slices
 
 #: Most rows along an axis of one octave's grid: a row's coordinates are packed into one int64
@@ -135,11 +136,34 @@ def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0):
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))], float(worst.max())
 
 
+#: The compile helper's job that compiles the grid's kernels (:func:`compile_ahead`).
+AHEAD_JOB = "numba: the overlap check's grid"
+
+
+def compile_ahead() -> None:
+    """Where Numba's disk cache lacks the grid's kernels, start a helper process compiling them
+    (:mod:`ndpack.compile_ahead`): a packing's final check then waits for it, if at all, instead
+    of compiling them. Only where two helpers may start (see :func:`ndpack.geometry.close_pairs.compile_ahead`)."""
+    if not ahead.function_on_disk(_scan):
+        ahead.start([(AHEAD_JOB, 3.0, f"{__name__}:warm_up", [])], least=2)
+
+
+def warm_up() -> None:
+    """Compile (or load) the grid's kernels by checking a few spheres, two of them overlapping (so
+    that the second pass runs), with the argument types a packing's check passes: the compile
+    helper's job."""
+    rng = np.random.default_rng(0)
+    centers, radii = rng.random((40, 3)), np.full(40, 0.01)
+    centers[1] = centers[0]
+    overlapping_pairs(centers, radii, 0.0)
+
+
 @functools.cache
 def _kernels():
     """``_boxes``, ``_build`` and ``_scan`` compiled by Numba, the last releasing the GIL (run in
     slices by threads: :func:`ndpack.parallel.run_in_slices`), imported at the first check, so
-    ``import ndpack`` stays light."""
+    ``import ndpack`` stays light; or loaded from disk where a compile helper compiled them."""
+    ahead.wait(AHEAD_JOB)
     import numba
 
     from ..log import numba_functions

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import log
+from .. import compile_ahead, log
 from ..log import notice, warn
 from .language import STACK_DEPTH
 
@@ -273,6 +273,17 @@ def _import_generated(text: str, kind: str):
     return module
 
 
+def import_generated_again(digest: str, kind: str = "numba"):
+    """The generated module of ``digest`` (as :func:`_import_generated` names its file) that another
+    process wrote to the cache folder, imported here under the same name: how a compile helper
+    (:mod:`ndpack.compile_ahead`) compiles the very functions that process will load. Raises
+    FileNotFoundError where this process's cache folder lacks it (one of them was refused)."""
+    if not all(c in "0123456789abcdef" for c in digest):
+        raise ValueError(f"not a generated module's digest: {digest!r}")
+    text = (cache_folder(kind) / f"ndpack_{digest}.py").read_text()
+    return _import_generated(text, kind)
+
+
 def _write(path: Path, text: str) -> None:
     """Write then rename, so a concurrent process never reads half a file; the file is private
     (0600, from mkstemp) whatever the umask."""
@@ -420,10 +431,13 @@ class CudaKernel:
     """A numba-cuda kernel that, at its first launch in this process, announces (and counts) a
     compile where Numba's disk cache holds nothing of it yet, and times that launch, which
     compiles it: the kernels' times add up to the next notice's estimate for their title, as
-    the CPU kernels' do. (numba-cuda has no compile event that a listener can use.)"""
+    the CPU kernels' do. (numba-cuda has no compile event that a listener can use.) Where a
+    compile helper has it (``ahead``, a job key of :mod:`ndpack.compile_ahead`), the first launch
+    waits for that helper, then loads the kernel from disk; the wait counts as its compile."""
 
     def __init__(self, kernel):
         self.kernel = kernel
+        self.ahead: str | None = None
         self._checked = False
 
     def __getitem__(self, config):
@@ -431,19 +445,18 @@ class CudaKernel:
         if self._checked:
             return launch
         self._checked = True
+        title = _titles.get(getattr(getattr(self.kernel, "py_func", None), "__module__", ""), "shapes")
+        if self.ahead is not None:
+            _cuda_compile_time(title, compile_ahead.wait(self.ahead))
         if self._cached():
             return launch
         COMPILES["numba-cuda"] = COMPILES.get("numba-cuda", 0) + 1
-        title = _titles.get(getattr(getattr(self.kernel, "py_func", None), "__module__", ""), "shapes")
-        if title not in _announced_cuda:
-            _announced_cuda.add(title)
-            announce("numba-cuda", title)
+        announce_cuda(title)
 
         def compiling(*args):
             started = time.perf_counter()
             result = launch(*args)  # compiles, then queues the launch
-            _cuda_seconds[title] = _cuda_seconds.get(title, 0.0) + time.perf_counter() - started
-            _record("numba-cuda", _cuda_seconds[title], title)
+            _cuda_compile_time(title, time.perf_counter() - started)
             return result
 
         return compiling
@@ -455,6 +468,25 @@ class CudaKernel:
 
     def __getattr__(self, name):
         return getattr(self.kernel, name)
+
+
+def announce_cuda(title: str) -> None:
+    """Say numba-cuda's first compile of the kernels of ``title`` (once a process)."""
+    if title not in _announced_cuda:
+        _announced_cuda.add(title)
+        announce("numba-cuda", title)
+
+
+def cuda_title(namespace: dict) -> str:
+    """What the numba-cuda kernels of a generated ``namespace`` are for (their notices' words)."""
+    return _titles.get(namespace.get("__name__", ""), "shapes")
+
+
+def _cuda_compile_time(title: str, seconds: float) -> None:
+    """Add ``seconds`` to this process's compile time of the numba-cuda kernels of ``title``."""
+    if seconds > 0:
+        _cuda_seconds[title] = _cuda_seconds.get(title, 0.0) + seconds
+        _record("numba-cuda", _cuda_seconds[title], title)
 
 
 _announced_cuda: set[str] = set()

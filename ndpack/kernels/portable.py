@@ -98,6 +98,13 @@ def kernel_names(text: str) -> list[str]:
     return [function.name for function in _parse(text) if is_kernel(function)]
 
 
+def kernel_argument_types(text: str) -> dict[str, tuple[str, ...]]:
+    """The kernels of portable ``text`` by name, each with its arguments' types in order (the
+    annotations, names of :data:`ARGUMENT_TYPES`): what a compiler given a signature needs."""
+    return {function.name: tuple(_argument_types(function).values()) for function in _parse(text)
+            if is_kernel(function)}
+
+
 def _points(function: ast.FunctionDef) -> set[str]:
     """The names of ``function``'s points: its arguments typed ``point`` and the locals made by ``point()``."""
     names = {arg.arg for arg in function.args.args

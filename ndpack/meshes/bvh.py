@@ -17,6 +17,8 @@ import functools
 
 import numpy as np
 
+from .. import compile_ahead as ahead
+
 #: Most triangles in a leaf: 8 and 16 measured fastest, within noise, among 1, 2, 4, 8, 12, 16 and 24
 #: (signed queries on the armadillo, 2 cores).
 LEAF_SIZE = 8
@@ -65,9 +67,17 @@ def build(elements: np.ndarray) -> Tree:
                         LEAF_SIZE, BINS, MAX_DEPTH))
 
 
+#: ``_build``'s argument types as :func:`build` passes them (Numba's words), and the job of the compile
+#: helper that compiles it for them (:func:`ndpack.meshes.queries.compile_ahead`).
+SIGNATURE = "(float64[:, ::1], float64[:, ::1], float64[:, ::1], int64, int64, int64)"
+AHEAD_JOB = "numba: the mesh tree's build"
+
+
 @functools.cache
 def _compiled():
-    """``_build`` compiled by Numba (imported only when a tree is built: ``import ndpack`` stays light)."""
+    """``_build`` compiled by Numba (imported only when a tree is built: ``import ndpack`` stays light),
+    or loaded from disk where a compile helper compiled it."""
+    ahead.wait(AHEAD_JOB)
     import numba
 
     global _stable_order

@@ -7,6 +7,7 @@ import functools
 
 import numpy as np
 
+from .. import compile_ahead as ahead
 from . import bvh
 from .kernels import HEADER, SEGMENT, TRIANGLE, WINDING, node_size
 
@@ -160,8 +161,15 @@ def relocate(block: np.ndarray, offset: int) -> np.ndarray:
     return block
 
 
+#: ``_winding_data``'s argument types as :func:`pack_mesh` passes them (Numba's words), and the job of
+#: the compile helper that compiles it for them (:func:`ndpack.meshes.queries.compile_ahead`).
+WINDING_SIGNATURE = "(float64[:, :, ::1], float64[:, ::1], float64[:, ::1], int64[::1], int64[::1])"
+AHEAD_JOB = "numba: the mesh's winding data"
+
+
 @functools.cache
 def _compiled_winding_data():
+    ahead.wait(AHEAD_JOB)
     import numba
 
     return numba.njit(cache=True)(_winding_data)

@@ -10,7 +10,8 @@ import functools
 
 import numpy as np
 
-from ..kernels.compile import PARALLEL_FROM, numba_namespace
+from .. import compile_ahead as ahead
+from ..kernels.compile import PARALLEL_FROM, announce, numba_namespace
 from ..kernels.program import Program
 from ..parallel import run_in_slices
 from . import kernels
@@ -54,10 +55,58 @@ def winding_all(first, last, points, prm, out):
 '''
 
 
-@functools.cache
+#: The loops' argument types as :func:`_run` passes them (Numba's words): what the compile helpers
+#: compile them for (:func:`compile_ahead`).
+SIGNATURES = {
+    "signed_all": "(int64, int64, float64[:, ::1], float64[::1], float64[::1])",
+    "winding_all": "(int64, int64, float64[:, ::1], float64[::1], float64[::1])",
+    "closest_all": "(int64, int64, float64[:, ::1], float64[::1], float64, boolean, float64[::1], float64[:, ::1], "
+                   "int64[::1])",
+}
+#: Their first compiles on 2 cores, in seconds (helpers share them by it).
+WEIGHTS = {"signed_all": 3.0, "winding_all": 2.0, "closest_all": 3.0}
+
+
+def compile_ahead() -> None:
+    """Where Numba's disk cache lacks them, start helper processes compiling a mesh's kernels side
+    by side (:mod:`ndpack.compile_ahead`): its tree's build, its winding data and these loops, which
+    loading a mesh compiles one after the other (from 2 helpers up: one would compile them in turn)."""
+    from . import bvh, layout
+
+    jobs = []
+    namespace = _dispatchers()
+    for name, signature in SIGNATURES.items():
+        if not ahead.on_disk(namespace[name]):
+            jobs.append((_job(name), WEIGHTS[name], "ndpack.compile_ahead:compile_signature",
+                         [__name__, "_dispatchers", name, signature]))
+    for module, getter, function, signature, weight in (
+            (bvh, "_compiled", bvh._build, bvh.SIGNATURE, 1.5),
+            (layout, "_compiled_winding_data", layout._winding_data, layout.WINDING_SIGNATURE, 1.0)):
+        if not ahead.function_on_disk(function):
+            jobs.append((module.AHEAD_JOB, weight, "ndpack.compile_ahead:compile_signature",
+                         [module.__name__, getter, None, signature]))
+    if ahead.start(jobs, least=2):
+        # Its typical time: loading the armadillo on a fresh H100's host took 7.0-7.5 s with helpers, 2-3 s of
+        # it reading the file (bench/results/fresh_machine_h100_issue48_step12_turn*_now.json).
+        announce("numba", "a mesh's tree, winding data and queries, by helper processes", typical=5)
+
+
+def _job(name: str) -> str:
+    return f"numba: the mesh query {name}"
+
+
 def _namespace():
     """The compiled loops, each over a slice of the points and releasing the GIL, so that threads
-    run them (:func:`ndpack.parallel.run_in_slices`; compiled once, then loaded from disk)."""
+    run them (:func:`ndpack.parallel.run_in_slices`; compiled once, then loaded from disk, where
+    compile helpers may have put them)."""
+    for name in SIGNATURES:
+        ahead.wait(_job(name))
+    return _dispatchers()
+
+
+@functools.cache
+def _dispatchers():
+    """The loops as Numba's dispatchers: nothing compiles until one is called."""
     import numba
 
     program = Program(3, "mesh queries")

@@ -94,6 +94,7 @@ class TriangleMesh(Oracle):
     def __init__(self, vertices, faces, sign: str = "auto", name: str | None = None, holes: str | None = None):
         if sign not in surface.SIGN_METHODS:
             raise ShapeError(f"sign must be one of {surface.SIGN_METHODS}, got {sign!r}")
+        queries.compile_ahead()  # a fresh machine's mesh kernels, by helpers while the surface is prepared
         prepared = surface.prepare(vertices, faces, "cap" if holes is None else holes)
         self.vertices, self.faces, self.closed = prepared.vertices, prepared.faces, prepared.closed
         self.given_faces = self.faces[:prepared.given_count]
