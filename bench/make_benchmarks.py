@@ -239,6 +239,17 @@ SOURCES = {
     **{f"{case}_1m_h100_backends_issue48_step11_now.json": Source(
         "H100", "a89e925", "bash bench/gpu_issue48_step11.sh million", "2026-11-28")
        for case in ("armadillo", "cube", "square")},
+    # Issue 48's twelfth step (compile helpers): bench/gpu_issue48_step12.sh on one H100 lease, NumPy 2.4 carried,
+    # against 4d9dd08 in turns.
+    **{f"fresh_machine_h100_issue48_step12_turn{turn}_{version}.json": Source(
+        "H100", commit, "bash bench/gpu_issue48_step12.sh fresh", "2026-11-28")
+       for turn in (1, 2) for version, commit in (("base", "4d9dd08"), ("now", "19d892d less its mesh notice"))},
+    **{name: Source("H100", "19d892d less its mesh notice", "bash bench/gpu_issue48_step12.sh check", "2026-11-28")
+       for name in ("armadillo_100k_h100_backends_issue48_step12_now.json",)},
+    **{f"fresh_machine_2core_issue48_step12_{version}.json": Source(
+        "2 cores", commit, f"python bench/fresh_machine.py --mesh armadillo.obj --backends numba --out "
+        f"bench/results/fresh_machine_2core_issue48_step12_{version}.json", "2026-11-28")
+       for version, commit in (("base", "4d9dd08"), ("now", "19d892d"))},
     "work_model_2core_armadillo_100k_issue48_step11_walks.json": Source(
         "2 cores", "ebce931", "python bench/work_model.py --mesh armadillo.obj --count 100000 --parts walks"),
     "ahead_fraction_2core.json": Source(
@@ -515,39 +526,54 @@ def scale_h100() -> list[str]:
         "armadillo_1m_h100", "cube_1m_h100", "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")}
     # Issue 48's eleventh step, one H100 lease with NumPy 2.4 carried: the three backends in one process at
     # 100,000; Warp and numba-cuda at a million on the next lease.
-    backends11 = load("armadillo_100k_h100_backends_issue48_step11_flush.json")
-    arm5, arm5_cuda, arm5_cpu = backends11["warp"], backends11["numba-cuda"], backends11["numba"]
+    backends12 = load("armadillo_100k_h100_backends_issue48_step12_now.json")
+    arm5, arm5_cuda, arm5_cpu = backends12["warp"], backends12["numba-cuda"], backends12["numba"]
     million11 = {case: load(f"{case}_1m_h100_backends_issue48_step11_now.json")
                  for case in ("armadillo", "cube", "square")}
-    # Issue 48's eleventh step: where the time goes, Warp's levels, numba-cuda's frees.
-    where11 = {backend: load(f"where_h100_{backend}_issue48_step11.json")[backend.replace("_", "-")]
-               for backend in ("warp", "numba_cuda")}
-    levels11 = {}
-    for row in load("compile_options_h100_issue48_step11.json")["rows"]:
-        levels11.setdefault(row["variant"], []).append(row)
-    tiers11 = {version: [load(f"armadillo_100k_h100_warp_issue48_step11tiers_turn{turn}_{version}.json")["warp"]
-                         for turn in (1, 2)] for version in ("base", "now")}
-    frees11 = {count: [load(f"armadillo_100k_h100_numba_cuda_deallocs{count}_issue48_step11_turn{turn}_now.json")
-                       ["numba-cuda"] for turn in (1, 2)] for count in (10, 1000000)}
-    flush11 = {version: [load(f"armadillo_100k_h100_numba_cuda_issue48_step11_turn{turn}_{version}.json")["numba-cuda"]
-                         for turn in (1, 2)] for version in ("base", "now")}
-    beside11 = load("armadillo_100k_h100_backends_issue48_step11_flush.json")
-    walks11 = load("work_model_2core_armadillo_100k_issue48_step11_walks.json")["walks"]
-    step11_files = ["where_h100_warp_issue48_step11.json", "where_h100_numba_cuda_issue48_step11.json",
-                    "armadillo_100k_h100_backends_issue48_step11_where.json",
-                    "compile_options_h100_issue48_step11.json",
-                    *[f"armadillo_100k_h100_numba_cuda_deallocs{count}_issue48_step11_turn{turn}_now.json"
-                      for count in (10, 1000000) for turn in (1, 2)],
-                    *[f"armadillo_100k_h100_numba_cuda_issue48_step11_turn{turn}_base.json" for turn in (1, 2)],
-                    *[f"armadillo_100k_h100_numba_cuda_issue48_step11_turn{turn}_now.json" for turn in (1, 2)],
-                    "armadillo_100k_h100_backends_issue48_step11_flush.json",
-                    "work_model_2core_armadillo_100k_issue48_step11_walks.json",
-                    *[f"armadillo_100k_h100_warp_issue48_step11tiers_turn{turn}_{version}.json"
-                      for turn in (1, 2) for version in ("base", "now")]]
     cube_1m, cube_1m_cpu = final["cube_1m_h100"]["warp"], final["cube_1m_h100host_numba"]["numba"]
     square_1m, square_1m_cpu = final["square_1m_h100"]["warp"], final["square_1m_h100host_numba"]["numba"]
     peak11 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
                              (RESULTS / "memory_h100_issue48_step11.txt").read_text()))
+    # Issue 48's twelfth step: compile helpers; a fresh machine's first packing in turns with 4d9dd08, the three
+    # backends again in one process.
+    fresh12 = {(turn, version): {row["backend"]: row for row in
+                                 load(f"fresh_machine_h100_issue48_step12_turn{turn}_{version}.json")["rows"]}
+               for turn in (1, 2) for version in ("base", "now")}
+
+    def compiled_here(version):
+        return ", ".join(str(sum(fresh12[(turn, version)]["numba-cuda"]["compiled_here"].get(kind, 0)
+                                 for kind in ("numba", "numba-cuda"))) for turn in (1, 2))
+
+    def fresh_pair(backend, key):
+        return (", ".join(seconds(fresh12[(turn, "now")][backend][key]) for turn in (1, 2)) + " against "
+                + ", ".join(seconds(fresh12[(turn, "base")][backend][key]) for turn in (1, 2)))
+
+    step12 = (
+        "**Compile helpers** (twelfth step, one H100 lease, in turns with 4d9dd08): a fresh machine's first packing "
+        "of the armadillo (3 spheres, every cache empty, `bench/fresh_machine.py`), from `import ndpack` to the "
+        f"spheres, took {fresh_pair('numba-cuda', 'whole_s')} with numba-cuda and {fresh_pair('warp', 'whole_s')} "
+        f"with Warp (goal: 30 s); loading the mesh {fresh_pair('numba-cuda', 'load_s')} (numba-cuda's runs) and "
+        f"{fresh_pair('warp', 'load_s')} (Warp's). The kernels compiled in helper processes side by side, the "
+        "packing's process compiled none (numba-cuda's runs, its Numba and numba-cuda compiles: "
+        f"{compiled_here('now')} against {compiled_here('base')}). Most of the gain is the CPU's compiles (the "
+        "mesh's at load, the checks' grids): numba-cuda's kernels kept the packing waiting "
+        + ", ".join(seconds(fresh12[(turn, "now")]["numba-cuda"]["compile_times"]["numba-cuda: meshes"])
+                    for turn in (1, 2))
+        + " against " + ", ".join(
+            seconds(fresh12[(turn, "base")]["numba-cuda"]["compile_times"]["numba-cuda: meshes"]) for turn in (1, 2))
+        + " in one process, since the move kernel's helper compiles the mesh's walk again, after its own start "
+        "(Python, numba-cuda, a CUDA context). "
+        "The packing is unchanged: numba-cuda's 100,000 spheres are 4d9dd08's "
+        "([output](../bench/results/same_spheres_h100_issue48_step12.txt)); in one process numba-cuda "
+        f"{seconds(backends12['numba-cuda']['median'])}, Warp {seconds(backends12['warp']['median'])}, numba on the "
+        f"host's 16 cores {seconds(backends12['numba']['median'])} "
+        f"({backends12['numba']['median'] / backends12['numba-cuda']['median']:.1f}x, "
+        f"{backends12['numba']['median'] / backends12['warp']['median']:.1f}x). The eleventh step's paragraph (where "
+        "the time goes, Warp's level 3, numba-cuda's frees) is in the history, and in `docs/design.md`. Warp's peak "
+        f"GPU memory at a million (eleventh step): the armadillo {int(peak11['armadillo']):,} MiB, the cube "
+        f"{int(peak11['cube']):,} MiB ([output](../bench/results/memory_h100_issue48_step11.txt)).")
+    step12_files = [f"fresh_machine_h100_issue48_step12_turn2_{version}.json" for version in ("base", "now")] + [
+        "armadillo_100k_h100_backends_issue48_step12_now.json"]
     step7_files = ["profile_kernels_h100_armadillo_issue48_step7.json"]
     step7_files += [f"{name}_issue48_step7b_now.json" for name in final]
     step7_files += ["work_model_2core_armadillo_100k_issue48_step7.json"]
@@ -575,7 +601,7 @@ def scale_h100() -> list[str]:
              for name, old, new7, model7_ in zip(names, parts(before), parts(arm7_profiled), guess7)]
     rows = [
         ["armadillo (100k triangles)", "100,000", seconds(arm5["median"]), seconds(arm5_cuda["median"]),
-         seconds(arm5_cpu["median"]), f"{arm5['fill']:.4f}", "medians of 3, a89e925 (NumPy 2.4)"],
+         seconds(arm5_cpu["median"]), f"{arm5['fill']:.4f}", "medians of 3, 19d892d (NumPy 2.4)"],
         ["unit cube", "100,000", *[seconds(median_of(cube, backend=b)) for b in ("warp", "numba-cuda", "numba")],
          f"{median_of(cube, 'fill', backend='warp'):.4f}", "medians of 2, 4ea141e"],
         ["armadillo (100k triangles)", "1,000,000", now_1m("armadillo", "warp"), now_1m("armadillo", "numba-cuda"), "",
@@ -618,57 +644,8 @@ def scale_h100() -> list[str]:
         f"node); the host's round takes {gpu['host_over_cpu']:.1f}x its 2-core time. The final check finds overlaps in "
         "a grid's sorted rows (Numba), not k-d trees. Cells split finer (ratio 2.5, not 4) filled 0.5% more in 34 "
         "rounds, but took 2.72 s, not 2.07 s ([output](../bench/results/split_ratio_h100_issue48.txt)).",
-        "**Where the time goes, and a small gain** (eleventh step, one H100 lease): the armadillo at 100,000 on Warp "
-        f"took {seconds(where11['warp']['stages']['setup'])} to set up, "
-        f"{seconds(where11['warp']['stages']['rounds'])} in its rounds and "
-        f"{seconds(where11['warp']['stages']['verify'])} for the final check (medians of 3); its kernels "
-        f"{seconds(where11['warp']['device'])} of device time, the move "
-        f"{seconds(where11['warp']['kernels']['move_ids[move+ahead]'][1])} in "
-        f"{where11['warp']['kernels']['move_ids[move+ahead]'][0]} launches; numba-cuda's same kernels "
-        f"{seconds(where11['numba_cuda']['device'])}, its move "
-        f"{seconds(where11['numba_cuda']['kernels']['move_ids[move+ahead]'][1])}: the rest of a round is the host's "
-        "turn, the GPU idle ([Warp](../bench/results/where_h100_warp_issue48_step11.txt), "
-        "[numba-cuda](../bench/results/where_h100_numba_cuda_issue48_step11.txt)). Warp's optimisation level 3 "
-        "(Warp's default) compiled the two modules in "
-        + ", ".join(f"{row['compiles']['warp: meshes on cuda:0']:.0f} s + "
-                    f"{row['compiles']['warp: meshes (cooperative moves) on cuda:0']:.0f} s" for row in levels11["O3"])
-        + " against " + ", ".join(f"{row['compiles']['warp: meshes on cuda:0']:.0f} s + "
-                                 f"{row['compiles']['warp: meshes (cooperative moves) on cuda:0']:.0f} s"
-                                 for row in levels11["ndpack"])
-        + " at ndpack's 2 (fresh caches; [output](../bench/results/compile_options_h100_issue48_step11.json)); with "
-        "it the cells' distances took "
-        + ", ".join(f"{1e3 * run['kernels']['cell_distances'][1]:.0f} ms" for run in tiers11["now"]) + " against "
-        + ", ".join(f"{1e3 * run['kernels']['cell_distances'][1]:.0f} ms" for run in tiers11["base"]) + ", the move "
-        + ", ".join(f"{1e3 * run['kernels']['move_ids[move+ahead]'][1]:.0f} ms" for run in tiers11["now"])
-        + " against "
-        + ", ".join(f"{1e3 * run['kernels']['move_ids[move+ahead]'][1]:.0f} ms" for run in tiers11["base"])
-        + ", the packing " + ", ".join(seconds(run['median']) for run in tiers11["now"]) + " against "
-        + ", ".join(seconds(run['median']) for run in tiers11["base"])
-        + " (in turns, the same spheres): not worth three times the first compile, nor the background build of it "
-        "that 1fbb251 tried (kept aside, not on main). "
-        "numba-cuda frees device memory in batches of 11, and each free waits for the whole device: with batches "
-        "never freed its rounds took "  # numba-cuda's own setting: NUMBA_CUDA_MAX_PENDING_DEALLOCS_COUNT
-        + ", ".join(seconds(run['stages']['rounds']) for run in frees11[1000000]) + " against "
-        + ", ".join(seconds(run['stages']['rounds']) for run in frees11[10]) + "; its store now frees where it has "
-        "just waited for its stream: rounds " + ", ".join(seconds(run['stages']['rounds']) for run in flush11["now"])
-        + " against 64cf4e0's " + ", ".join(seconds(run['stages']['rounds']) for run in flush11["base"])
-        + " in turns, the same spheres ([output](../bench/results/same_spheres_h100_issue48_step11.txt)). In one "
-        f"process: numba-cuda {seconds(beside11['numba-cuda']['median'])}, Warp {seconds(beside11['warp']['median'])}, "
-        f"numba on the host's 16 cores {seconds(beside11['numba']['median'])} "
-        f"({beside11['numba']['median'] / beside11['numba-cuda']['median']:.1f}x, "
-        f"{beside11['numba']['median'] / beside11['warp']['median']:.1f}x). The move launches too large to walk "
-        f"cooperatively ({walks11['plain_launches']} in the work model's run on 2 cores) last as long as their slowest "
-        "walk; with the K hardest prototypes in cooperative blocks and the rest alone, their critical path would be "
-        + ", ".join(f"{walks11['hard_first'][f'oracle_{k}']:.2f}" for k in (256, 1024, 4096))
-        + " of today's for K = 256, 1,024, 4,096 where the hardest are known, and "
-        + ", ".join(f"{walks11['hard_first'][f'shallowest_{k}']:.2f}" for k in (256, 1024, 4096))
-        + " where they are guessed as the prototypes of the shallowest cells (known before the move): the next "
-        "step's candidate. Warp and numba-cuda pack the same spheres "
-        "since the tenth step (the kernels written once); that step's paragraph and the eighth's (numba-cuda's "
-        "cooperative walk) are in the history. Warp's peak GPU memory at a million: the armadillo "
-        f"{int(peak11['armadillo']):,} MiB, the cube {int(peak11['cube']):,} MiB "
-        "([output](../bench/results/memory_h100_issue48_step11.txt)).",
-        *sources(*step11_files, *[f"{case}_1m_h100_backends_issue48_step11_now.json"
+        step12,
+        *sources(*step12_files, *[f"{case}_1m_h100_backends_issue48_step11_now.json"
                                   for case in ("armadillo", "cube", "square")],
                  *step7_files, "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
@@ -930,7 +907,7 @@ def compile_once() -> list[str]:
 
 #: A fresh machine's first packing (bench/fresh_machine.py): this code's files and the code before issue 48's
 #: ninth step, measured in the same run.
-FRESH = (("H100", "fresh_machine_h100_issue48_step9b"), ("2 cores", "fresh_machine_2core_issue48_step9"))
+FRESH = (("H100", "fresh_machine_h100_issue48_step12_turn1"), ("2 cores", "fresh_machine_2core_issue48_step12"))
 
 
 def fresh_machine() -> list[str]:
@@ -948,11 +925,13 @@ def fresh_machine() -> list[str]:
         "A fresh machine's first packing of the armadillo (100k triangles, 3 spheres), every cache empty (ndpack's, "
         "Numba's, Warp's, the driver's): from `import ndpack` to the spheres (whole), loading the mesh (its tree and "
         "its queries' compile), the first `nd.pack`, a second in the same process; the compiles ndpack timed, all "
-        "and the GPU kernels' (the rest are Numba's CPU compiles: the mesh queries and the final check's grids, "
-        "which every backend waits for). Issue 48's ninth step gave meshes alone their own program, compiled "
-        "numba-cuda's device functions once per argument types, gave the move one converge and numba-cuda's "
-        "converge to the move kernel, and Numba's CPU compiles of a mesh's tree, winding data, queries and the "
-        "overlap check less work (threads run their loops in slices, not Numba's parallel loops):",
+        "and the GPU kernels' (the rest are Numba's CPU compiles: the mesh queries and the checks' grids, "
+        "which every backend waits for; a compile helper's time counts where the packing waited for it, the "
+        "numba-cuda kernels', or where the helper took it, Numba's). At issue 48's twelfth step (19d892d) these "
+        "compile in helper processes side by side (`ndpack.compile_ahead`, from 3 cores up), against 4d9dd08 in "
+        "turns on one lease (the first turn; the second: \"Packing at scale: H100\"); on 2 cores one helper, as "
+        "before, for the shape-free kernels. (The ninth step's table, before and after meshes had their own program: "
+        "[benchmarks-history.md](benchmarks-history.md).)",
         "",
         *table(["machine", "backend", "code", "whole", "load", "first packing", "the next", "compiles",
                 "of which GPU kernels"], rows),
