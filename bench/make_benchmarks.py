@@ -246,6 +246,9 @@ SOURCES = {
        for turn in (1, 2) for version, commit in (("base", "4d9dd08"), ("now", "19d892d less its mesh notice"))},
     **{name: Source("H100", "19d892d less its mesh notice", "bash bench/gpu_issue48_step12.sh check", "2026-11-28")
        for name in ("armadillo_100k_h100_backends_issue48_step12_now.json",)},
+    **{f"hard_h100_{backend}_issue48_step12_turn{turn}.json": Source(
+        "H100", "7e5176d (kept aside, not on main)", "git checkout 7e5176d && bash bench/gpu_issue48_step12.sh hard",
+        "2026-11-28") for backend in ("warp", "numba_cuda") for turn in (1, 2)},
     **{f"fresh_machine_2core_issue48_step12_{version}.json": Source(
         "2 cores", commit, f"python bench/fresh_machine.py --mesh armadillo.obj --backends numba --out "
         f"bench/results/fresh_machine_2core_issue48_step12_{version}.json", "2026-11-28")
@@ -572,7 +575,32 @@ def scale_h100() -> list[str]:
         "the time goes, Warp's level 3, numba-cuda's frees) is in the history, and in `docs/design.md`. Warp's peak "
         f"GPU memory at a million (eleventh step): the armadillo {int(peak11['armadillo']):,} MiB, the cube "
         f"{int(peak11['cube']):,} MiB ([output](../bench/results/memory_h100_issue48_step11.txt)).")
+    hard12 = {backend: [load(f"hard_h100_{backend}_issue48_step12_turn{turn}.json") for turn in (1, 2)]
+              for backend in ("warp", "numba_cuda")}
+
+    def hard_pair(backend, variant, stage=None):
+        runs = hard12[backend]
+        if stage is None:  # the move launches' device time, every launch timed (the first turn)
+            kernels = runs[0][f"{backend.replace('_', '-')} {variant}"]["kernels"]
+            return seconds(sum(entry[1] for name, entry in kernels.items() if name.startswith("move_ids")))
+        return ", ".join(seconds(run[f"{backend.replace('_', '-')} {variant}"]["median"]) for run in runs)
+
+    step12 += (
+        " **A dead end, kept aside** (7e5176d, not on main): a move launch too large to walk cooperatively moved the "
+        "prototypes of its hard cells (a known wall below W times the cell's longest side) in cooperative blocks "
+        "first, then the others alone. The work model put the plain launches' critical path at 0.82, 0.52, 0.24 and "
+        "0.25 of today's for W = 0.5, 1, 1.5 and 2; on the H100 the move launches took "
+        f"{hard_pair('warp', 'hard-1')} (W = 1) against {hard_pair('warp', 'hard-off')} on Warp, "
+        f"{hard_pair('numba_cuda', 'hard-1')} against {hard_pair('numba_cuda', 'hard-off')} on numba-cuda, and the "
+        f"packing {hard_pair('warp', 'hard-1', 'median')} against {hard_pair('warp', 'hard-off', 'median')} (Warp), "
+        f"{hard_pair('numba_cuda', 'hard-1', 'median')} against {hard_pair('numba_cuda', 'hard-off', 'median')} "
+        "(numba-cuda), every W alike: 20-40% of the moved prototypes are hard by this rule (the work model's run, "
+        "2 cores), thousands of blocks a launch "
+        "that each run a whole move's steps cooperatively, in waves of at most 32 blocks a multiprocessor. The model "
+        "counted only the walks' rounds; it needs a cooperative block's cost per step before the next such trial.")
     step12_files = [f"fresh_machine_h100_issue48_step12_turn2_{version}.json" for version in ("base", "now")] + [
+        *[f"hard_h100_{backend}_issue48_step12_turn{turn}.json"
+          for backend in ("warp", "numba_cuda") for turn in (1, 2)],
         "armadillo_100k_h100_backends_issue48_step12_now.json"]
     step7_files = ["profile_kernels_h100_armadillo_issue48_step7.json"]
     step7_files += [f"{name}_issue48_step7b_now.json" for name in final]
