@@ -72,21 +72,24 @@ def share(jobs: list[tuple[str, float, str, list]], helpers: int) -> list[list[t
 def start(jobs: list[tuple[str, float, str, list]], least: int = 1) -> bool:
     """Run ``jobs`` (key, weight, ``"module:function"``, arguments) in helper processes, unless
     fewer than ``least`` may start (see :func:`helpers_allowed`) or a job of the same key is
-    already under way. Returns whether helpers were started."""
+    already under way. Returns whether helpers were started (where some could not be, the jobs
+    they would have run are not under way: their kernels compile here)."""
     jobs = [job for job in jobs if job[0] not in _helpers]
     allowed = helpers_allowed(least)
     if not jobs or not allowed:
         return False
+    started = False
     for group in share(jobs, allowed):
         calls = [[function, arguments] for _, _, function, arguments in group]
         try:
             helper = subprocess.Popen([sys.executable, "-c", HELPER, json.dumps(calls)], stdin=subprocess.DEVNULL,
                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        except OSError:  # no helpers here: this process compiles the kernels when it first uses them
-            return False
+        except OSError:  # no more helpers here: this process compiles the rest when it first uses them
+            break
         for key, _, _, _ in group:
             _helpers[key] = helper
-    return True
+        started = True
+    return started
 
 
 def wait(key: str) -> float:

@@ -180,8 +180,9 @@ class NumbaCudaBackend(Backend):
                 for name in missing]
         if len(missing) > 1 and compile_ahead.start(jobs, least=3):
             announce_cuda(cuda_title(namespace))
+            under_way = set(compile_ahead.under_way())
             for (key, *_), name in zip(jobs, missing):
-                namespace[name].ahead = key
+                namespace[name].ahead = key if key in under_way else None
 
     def _walks(self, shape) -> bool:
         """Whether ``shape``'s kernels walk a tree (and so have a cooperative walk)."""

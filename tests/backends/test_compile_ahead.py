@@ -40,6 +40,31 @@ def test_helpers_follow_the_setting_and_the_cores(monkeypatch):
     assert not compile_ahead.start([("k", 1.0, "ndpack.compile_ahead:under_way", [])])
 
 
+def test_jobs_whose_helper_could_not_start_are_not_waited_for(monkeypatch):
+    """Where the system refuses a second helper, the first runs its jobs and the others are not under
+    way (this process compiles them itself): nothing waits for a helper that does not exist."""
+    monkeypatch.setenv("NDPACK_COMPILE_AHEAD", "1")
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: set(range(4)), raising=False)
+    started = []
+    real_popen = subprocess.Popen
+
+    def popen(*args, **kwargs):
+        if started:
+            raise OSError("no more processes")
+        started.append(real_popen(*args, **kwargs))
+        return started[-1]
+
+    monkeypatch.setattr(subprocess, "Popen", popen)
+    jobs = [(f"job {k}", 1.0, "ndpack.compile_ahead:under_way", []) for k in range(3)]
+    try:
+        assert compile_ahead.start(jobs)
+        assert compile_ahead.under_way() == ["job 0"]  # three helpers asked, one started
+        assert compile_ahead.wait("job 0") >= 0 and started[0].returncode == 0
+        assert compile_ahead.wait("job 1") == 0.0  # never under way: no wait
+    finally:
+        compile_ahead._stop_helpers()
+
+
 def test_a_helper_runs_only_ndpacks_functions():
     done = subprocess.run([sys.executable, "-c", compile_ahead.HELPER, json.dumps([["os:system", ["true"]]])],
                           capture_output=True, text=True, timeout=120)
