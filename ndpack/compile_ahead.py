@@ -13,7 +13,8 @@ heaviest first, each to the helper with the least so far), so that the helpers f
 A helper's failure costs only time: the kernels it did not leave on disk compile here.
 
 ``NDPACK_COMPILE_AHEAD=0`` turns helpers off (``1``: on whatever the cores); by default they run
-where this machine has a core to spare, at most :data:`HELPERS_MOST` at once.
+where this process has a core to spare (see :func:`helpers_allowed`), at most :data:`HELPERS_MOST`
+at once.
 """
 
 from __future__ import annotations
@@ -42,7 +43,10 @@ HELPER = "import sys; from ndpack.compile_ahead import main; main(sys.argv[1:])"
 def helpers_allowed(least: int = 1) -> int:
     """How many helpers a batch may start now: the cores this process may use less one, at most
     :data:`HELPERS_MOST` less those running, and 0 below ``least`` (a batch that only pays when
-    split) or where ``NDPACK_COMPILE_AHEAD=0``; with ``NDPACK_COMPILE_AHEAD=1`` at least ``least``."""
+    split) or where ``NDPACK_COMPILE_AHEAD=0``; with ``NDPACK_COMPILE_AHEAD=1`` at least ``least``.
+    The cores this process may use are those it may run on, or its ``NUMBA_NUM_THREADS`` where
+    that is fewer: a worker of ndpack's local pools has its share of the machine there, so that a
+    pool on a fresh machine does not start a set of helpers in each worker."""
     setting = os.environ.get("NDPACK_COMPILE_AHEAD", "").strip()
     if setting == "0":
         return 0
@@ -50,6 +54,9 @@ def helpers_allowed(least: int = 1) -> int:
         cores = len(os.sched_getaffinity(0))
     except AttributeError:  # not on Linux
         cores = os.cpu_count() or 1
+    threads = os.environ.get("NUMBA_NUM_THREADS", "").strip()
+    if threads.isdigit() and int(threads) > 0:
+        cores = min(cores, int(threads))
     running = sum(1 for helper in set(_helpers.values()) if helper.poll() is None)
     allowed = min(cores - 1, HELPERS_MOST) - running
     if setting == "1":

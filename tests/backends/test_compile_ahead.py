@@ -30,7 +30,13 @@ def test_jobs_are_shared_heaviest_first_so_that_helpers_finish_together():
 def test_helpers_follow_the_setting_and_the_cores(monkeypatch):
     monkeypatch.setattr(os, "sched_getaffinity", lambda pid: set(range(16)), raising=False)
     monkeypatch.delenv("NDPACK_COMPILE_AHEAD", raising=False)
+    monkeypatch.delenv("NUMBA_NUM_THREADS", raising=False)
     assert compile_ahead.helpers_allowed(3) == compile_ahead.HELPERS_MOST
+    monkeypatch.setenv("NUMBA_NUM_THREADS", "4")  # a local pool's worker: its share of the cores
+    assert compile_ahead.helpers_allowed(3) == 3
+    monkeypatch.setenv("NUMBA_NUM_THREADS", "1")
+    assert compile_ahead.helpers_allowed(1) == 0
+    monkeypatch.delenv("NUMBA_NUM_THREADS")
     monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
     assert compile_ahead.helpers_allowed(1) == 1 and compile_ahead.helpers_allowed(3) == 0  # 2 cores: one
     monkeypatch.setenv("NDPACK_COMPILE_AHEAD", "1")
