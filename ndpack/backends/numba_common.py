@@ -111,13 +111,15 @@ def _geometry_job(dim: int) -> str:
 
 def compile_geometry_beside(dim: int) -> None:
     """Where this machine has not compiled the shape-free kernels of ``dim`` yet, compile them in
-    a helper process while this one compiles the shape's (:mod:`ndpack.compile_ahead`): a first
-    packing then waits for two compilers side by side, not one after the other (a first ``ndpack
-    pack`` on 2 cores: 17 s -> 12 s, docs/benchmarks.md "Start-up"). Numba's disk cache hands the
-    result over."""
+    a helper process while this one compiles the shape's (:mod:`ndpack.compile_ahead`), where two
+    helpers could start (3 cores and up). Numba's disk cache hands the result over. On 2 cores it
+    once paid (a first ``ndpack pack`` 17 s -> 12 s, issue 6), but no longer: the two processes
+    compile many of the same functions, and the demo's first ``ndpack pack`` took 22.5 s and
+    23.3 s with the helper against 20.7 s and 20.7 s without, the armadillo's first packing 32.5 s
+    against 31.3 s (issue 48, twelfth step)."""
     if dim in _asked:
         return
     _asked.add(dim)
     namespace = geometry_kernels(dim, wait=False)
     if not all(ahead.on_disk(namespace[name]) for name in GEOMETRY_ENTRIES):
-        ahead.start([(_geometry_job(dim), 1.0, "ndpack.backends.numba_backend:warm_geometry", [int(dim)])])
+        ahead.start([(_geometry_job(dim), 1.0, "ndpack.backends.numba_backend:warm_geometry", [int(dim)])], least=2)

@@ -137,14 +137,13 @@ def _listed(run, room):
 AHEAD_JOB = "numba: the conflict check's grid"
 
 
-def compile_ahead() -> None:
-    """Where Numba's disk cache lacks the grid's kernels, start a helper process compiling them
-    (:mod:`ndpack.compile_ahead`): a first packing's conflict check then waits for it, if at all,
-    instead of compiling them. Only where two helpers may start: on 2 cores the one helper is
-    better spent on the packing's shape-free kernels (a first packing of the armadillo took 34.7 s
-    against 31.1 s when this one took it; ``bench/fresh_machine.py``)."""
-    if not ahead.function_on_disk(_around):
-        ahead.start([(AHEAD_JOB, 2.5, f"{__name__}:warm_up", [])], least=2)
+def ahead_jobs() -> list:
+    """The compile helper's job for the grid's kernels (:mod:`ndpack.compile_ahead`), where Numba's
+    disk cache lacks them (else none): a first packing's check then waits for the helper, if at
+    all, instead of compiling them."""
+    if ahead.function_on_disk(_around):
+        return []
+    return [(AHEAD_JOB, 2.5, f"{__name__}:warm_up", [])]
 
 
 def warm_up() -> None:

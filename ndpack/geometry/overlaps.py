@@ -140,12 +140,13 @@ def overlapping_pairs(centers: np.ndarray, radii: np.ndarray, tol: float = 0.0):
 AHEAD_JOB = "numba: the overlap check's grid"
 
 
-def compile_ahead() -> None:
-    """Where Numba's disk cache lacks the grid's kernels, start a helper process compiling them
-    (:mod:`ndpack.compile_ahead`): a packing's final check then waits for it, if at all, instead
-    of compiling them. Only where two helpers may start (see :func:`ndpack.geometry.close_pairs.compile_ahead`)."""
-    if not ahead.function_on_disk(_scan):
-        ahead.start([(AHEAD_JOB, 3.0, f"{__name__}:warm_up", [])], least=2)
+def ahead_jobs() -> list:
+    """The compile helper's job for the grid's kernels (:mod:`ndpack.compile_ahead`), where Numba's
+    disk cache lacks them (else none): a first packing's check then waits for the helper, if at
+    all, instead of compiling them."""
+    if ahead.function_on_disk(_scan):
+        return []
+    return [(AHEAD_JOB, 3.0, f"{__name__}:warm_up", [])]
 
 
 def warm_up() -> None:

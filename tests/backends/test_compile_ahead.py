@@ -144,8 +144,7 @@ GRIDS = textwrap.dedent("""
     from ndpack import compile_ahead
     from ndpack.geometry import close_pairs, overlaps
 
-    close_pairs.compile_ahead()
-    overlaps.compile_ahead()
+    compile_ahead.start(close_pairs.ahead_jobs() + overlaps.ahead_jobs())  # as a packing starts them
     under_way = compile_ahead.under_way()
     rng = np.random.default_rng(1)
     centers, radii = rng.random((500, 3)), np.full(500, 0.02)
@@ -159,7 +158,7 @@ GRIDS = textwrap.dedent("""
         for dispatcher in module._kernels():
             stats[dispatcher.py_func.__name__ + " " + module.__name__] = [
                 sum(dispatcher.stats.cache_hits.values()), sum(dispatcher.stats.cache_misses.values())]
-    close_pairs.compile_ahead()  # on disk now: no second helper
+    assert close_pairs.ahead_jobs() == overlaps.ahead_jobs() == []  # on disk now: no job
     print(json.dumps({"under_way": under_way, "again": compile_ahead.under_way(), "stats": stats,
                       "pairs": len(pairs[0]), "overlaps": len(overlapping[0])}))
 """)

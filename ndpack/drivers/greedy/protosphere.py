@@ -33,6 +33,7 @@ from ...backends.prototypes import best_starts, cell_bounds, top_order
 from ...backends.restarts import Restarts, run_key, stream
 from ...consistency import ensure_possible
 from ...errors import KEPT_IN_ERROR, GridWarning, InvalidPackingError, ParameterError, RepairWarning, ShapeError
+from ... import compile_ahead
 from ...geometry import close_pairs, overlaps
 from ...geometry.period import period_of
 from ...oracle import Oracle, ball_volume, check_compatible, check_packable
@@ -1023,9 +1024,8 @@ def run(shape, backend, strategy, *, counts, mode, iterations, restarts, seed, n
     started = time.perf_counter()
     steps, polish_steps = schedules(mode, int(iterations))
     deadline = None if time_budget is None else started + time_budget
-    if shape.dim <= 3:  # the checks' grids, where this machine has not compiled them: by helpers meanwhile
-        close_pairs.compile_ahead()
-        overlaps.compile_ahead()
+    if shape.dim <= 3:  # the checks' grids, where this machine has not compiled them: by a helper meanwhile
+        compile_ahead.start(close_pairs.ahead_jobs() + overlaps.ahead_jobs())
     state = RunState(shape, backend, counts, steps, polish_steps, int(restarts), run_key(np.random.default_rng(seed)),
                      deadline, time_budget, centers_in, obstacles)
     shape = shape if centers_in is None else centers_in
