@@ -200,7 +200,10 @@ def counting_prototypes(text: str) -> str:
 
 
 #: The hard-first question (issue 48, eleventh step): in a move launch too large to be cooperative, the
-#: hardest K prototypes in cooperative blocks and the rest serial; K as below.
+#: hardest K prototypes in cooperative blocks and the rest serial; K as below. Optimistic: a cooperative
+#: block costs its whole move's steps, not only its walks' rounds, and few blocks are resident at once. Built
+#: at the twelfth step with a threshold on the cells' walls in place of K (7e5176d, kept aside), the move
+#: launches took twice as long on an H100, where this model promised 0.24-0.82 of their critical path.
 HARD_FIRST = (256, 1024, 4096)
 #: A cooperative walk's rounds against a serial walk's nodes, at the armadillo's worst point
 #: (bench/cooperative_walk.py: 1,273 nodes in 47 rounds).
