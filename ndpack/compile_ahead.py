@@ -5,7 +5,10 @@ on an H100's host numba-cuda's took 16.6 s, the mesh queries 7.3 s and the check
 a first packing of 40.9 s (``bench/fresh_machine.py``). Numba's compiler holds a lock for the whole
 process, so threads cannot share the work, but processes can: a helper compiles what it is given
 into Numba's disk cache, which hands the result over, and this process waits for a helper only
-where it first needs one of its kernels (:func:`wait`), then loads it from disk.
+where it first needs one of its kernels (:func:`wait`), then loads it from disk. A fresh H100
+machine's first packing of the armadillo took 21.5-24.2 s with numba-cuda against 29.8-38.5 s, and
+17.1-17.4 s with Warp against 22.5-24.0 s; on 2 cores (one helper, for the checks' grids) 26.0 s
+against 32.3 s with numba (issue 48, twelfth step; ``docs/benchmarks.md``, "Compile once").
 
 A job is a function of an ndpack module and its arguments (JSON values), run in a helper as
 ``function(*arguments)``; :func:`start` shares the jobs out among helpers by their weights (the
