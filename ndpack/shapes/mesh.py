@@ -156,6 +156,7 @@ class TriangleMesh(Oracle):
         ``holes`` as for the class."""
         import os
 
+        queries.compile_ahead()  # before reading: the helpers start while the file is read and cleaned
         mesh = surface.read(path)
         return cls(mesh.vertices, mesh.faces, sign=sign, name=os.path.basename(os.fspath(path)), holes=holes)
 
