@@ -246,6 +246,9 @@ SOURCES = {
        for turn in (1, 2) for version, commit in (("base", "4d9dd08"), ("now", "19d892d less its mesh notice"))},
     **{name: Source("H100", "19d892d less its mesh notice", "bash bench/gpu_issue48_step12.sh check", "2026-11-28")
        for name in ("armadillo_100k_h100_backends_issue48_step12_now.json",)},
+    **{f"fresh_machine_h100_issue48_step12b_turn{turn}_{version}.json": Source(
+        "H100", commit, "STEP=step12b bash bench/gpu_issue48_step12.sh fresh", "2026-11-28")
+       for turn in (1, 2) for version, commit in (("base", "4d9dd08"), ("now", "5dba687"))},
     **{f"hard_h100_{backend}_issue48_step12_turn{turn}.json": Source(
         "H100", "7e5176d (kept aside, not on main)", "git checkout 7e5176d && bash bench/gpu_issue48_step12.sh hard",
         "2026-11-28") for backend in ("warp", "numba_cuda") for turn in (1, 2)},
@@ -590,6 +593,17 @@ def scale_h100() -> list[str]:
             return seconds(sum(entry[1] for name, entry in kernels.items() if name.startswith("move_ids")))
         return ", ".join(seconds(run[f"{backend.replace('_', '-')} {variant}"]["median"]) for run in runs)
 
+    final12 = {(turn, version): {row["backend"]: row for row in
+                                 load(f"fresh_machine_h100_issue48_step12b_turn{turn}_{version}.json")["rows"]}
+               for turn in (1, 2) for version in ("base", "now")}
+
+    def final_pair(backend):
+        return (", ".join(seconds(final12[(turn, "now")][backend]["whole_s"]) for turn in (1, 2)) + " against "
+                + ", ".join(seconds(final12[(turn, "base")][backend]["whole_s"]) for turn in (1, 2)))
+
+    step12 += (
+        f" The step's final code (5dba687) on another, slower lease: {final_pair('numba-cuda')} with numba-cuda, "
+        f"{final_pair('warp')} with Warp.")
     step12 += (
         " **A dead end, kept aside** (7e5176d, not on main): a move launch too large to walk cooperatively moved the "
         "prototypes of its hard cells (a known wall below W times the cell's longest side) in cooperative blocks "
@@ -604,6 +618,8 @@ def scale_h100() -> list[str]:
         "that each run a whole move's steps cooperatively, in waves of at most 32 blocks a multiprocessor. The model "
         "counted only the walks' rounds; it needs a cooperative block's cost per step before the next such trial.")
     step12_files = [f"fresh_machine_h100_issue48_step12_turn2_{version}.json" for version in ("base", "now")] + [
+        *[f"fresh_machine_h100_issue48_step12b_turn{turn}_{version}.json" for version in ("base", "now")
+          for turn in (1, 2)],
         *[f"hard_h100_{backend}_issue48_step12_turn{turn}.json"
           for backend in ("warp", "numba_cuda") for turn in (1, 2)],
         "armadillo_100k_h100_backends_issue48_step12_now.json"]
