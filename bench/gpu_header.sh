@@ -113,3 +113,12 @@ fresh_runs() {
       --out "$OUT/${name}_${version}.json" 2>&1 | grep -v "^Warp\|^Module"
   done
 }
+
+# beside_and_store_tests NAME: the armadillo at 100,000 on numba-cuda, Warp and numba on the host's cores in one
+# process ($OUT/NAME_now.json), then the device store's tests on this GPU ($OUT/gpu_tests_${CARD}_issue48_${STEP}.txt).
+beside_and_store_tests() {
+  kernels now "$1" --backends numba-cuda warp numba --mesh /tmp/armadillo.obj --count 100000 --repeats 3 \
+    | grep -E "^== |now: "
+  timeout 150 python3 -m pytest -q -p no:cacheprovider tests/backends/test_backends.py -k "small_device or fast_mode" \
+    2>&1 | tail -4 | tee "$OUT/gpu_tests_${CARD}_issue48_${STEP}.txt"
+}

@@ -71,10 +71,7 @@ case "${1:-}" in
     in_turns "armadillo_100k_${CARD}_numba_cuda_issue48_${STEP}" armadillo_numba-cuda --backends numba-cuda \
       --mesh /tmp/armadillo.obj --count 100000 --repeats 3
     same_spheres "$OUT/same_spheres_${CARD}_issue48_${STEP}.txt" armadillo_numba-cuda
-    kernels now "armadillo_100k_${CARD}_backends_issue48_${STEP}" --backends numba-cuda warp numba \
-      --mesh /tmp/armadillo.obj --count 100000 --repeats 3 | grep -E "^== |now: "
-    timeout 150 python3 -m pytest -q -p no:cacheprovider tests/backends/test_backends.py -k "small_device or fast_mode" \
-      2>&1 | tail -4 | tee "$OUT/gpu_tests_${CARD}_issue48_${STEP}.txt"
+    beside_and_store_tests "armadillo_100k_${CARD}_backends_issue48_${STEP}"
     tar czf "$FINAL/flush_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
   million)

@@ -175,6 +175,12 @@ def function_on_disk(function) -> bool:
 _on_disk: set = set()  # plain functions known to be in Numba's disk cache
 
 
+def job_unless_on_disk(function, key: str, weight: float, call: str, arguments: list) -> list:
+    """``[(key, weight, call, arguments)]``, a job for :func:`start`, where Numba's disk cache
+    lacks the plain ``function`` the job compiles (:func:`function_on_disk`); else ``[]``."""
+    return [] if function_on_disk(function) else [(key, weight, call, arguments)]
+
+
 def main(argv: list[str]) -> None:
     """A helper: run each ``[function, arguments]`` of the JSON list ``argv[0]`` in turn."""
     for function, arguments in json.loads(argv[0]):

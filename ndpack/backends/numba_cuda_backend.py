@@ -17,7 +17,6 @@ Without a GPU, set ``NUMBA_ENABLE_CUDASIM=1`` to run the same kernels in Numba's
 
 from __future__ import annotations
 
-import ast
 import weakref
 from pathlib import Path
 
@@ -25,8 +24,8 @@ import numpy as np
 
 from ..errors import BackendError
 from .. import compile_ahead
-from ..kernels.compile import (CudaKernel, announce_cuda, cuda_device_function, cuda_title,
-                               import_generated_again, numba_namespace)
+from ..kernels.compile import (CudaKernel, announce_cuda, cuda_device_function, cuda_title, function_names,
+                               import_generated_again, jit_generated, numba_namespace)
 from ..kernels.compiled import compiled_program
 from ..kernels.portable import kernel_argument_types, kernel_names, render
 from ..kernels.tape import interpreter
@@ -174,7 +173,7 @@ class NumbaCudaBackend(Backend):
         then waiting for its helper and loading it from Numba's disk cache."""
         missing = [name for name in ENTRY_TYPES if not namespace[name]._cached()]
         digest = Path(namespace["__file__"]).stem.removeprefix("ndpack_")
-        backend_names = [node.name for node in ast.parse(text).body if isinstance(node, ast.FunctionDef)]
+        backend_names = function_names(text)
         jobs = [(f"numba-cuda {digest} {name}", COMPILE_WEIGHTS.get(name, 0.1), f"{__name__}:compile_kernels",
                  [digest, list(program.kernels), backend_names, {name: list(ENTRY_TYPES[name])}, self.device])
                 for name in missing]
@@ -289,15 +288,11 @@ def compile_kernels(digest: str, program_names: list[str], backend_names: list[s
     the backend's)."""
     from numba import cuda
 
-    from ..kernels.compile import _checked_disk_caches
-
     if digest not in _helper_namespaces:
         cuda.select_device(int(device))
         namespace = import_generated_again(digest).__dict__
-        for name in program_names:
-            namespace[name] = cuda_device_function(namespace[name])
-        _jit_entries(cuda, namespace, backend_names)
-        _checked_disk_caches(namespace)
+        jit_generated(namespace, program_names, backend_names, cuda_device_function,
+                      lambda namespace_, names: _jit_entries(cuda, namespace_, names))
         _helper_namespaces[digest] = namespace
     namespace = _helper_namespaces[digest]
     for name, kinds in kernels.items():

@@ -141,9 +141,7 @@ def ahead_jobs() -> list:
     """The compile helper's job for the grid's kernels (:mod:`ndpack.compile_ahead`), where Numba's
     disk cache lacks them (else none): a first packing's check then waits for the helper, if at
     all, instead of compiling them."""
-    if ahead.function_on_disk(_around):
-        return []
-    return [(AHEAD_JOB, 2.5, f"{__name__}:warm_up", [])]
+    return ahead.job_unless_on_disk(_around, AHEAD_JOB, 2.5, f"{__name__}:warm_up", [])
 
 
 def warm_up() -> None:

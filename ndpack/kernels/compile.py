@@ -543,12 +543,26 @@ def numba_namespace(program, target: str, kernels: str, jit_kernels) -> dict:
     module = _import_generated(text, "numba")
     _titles[module.__name__] = program.title
     namespace = module.__dict__
-    for name in program.kernels:
-        namespace[name] = jit(namespace[name])
-    jit_kernels(namespace, [node.name for node in ast.parse(kernels).body if isinstance(node, ast.FunctionDef)])
-    _checked_disk_caches(namespace)  # before the first call, when Numba reads its index
+    jit_generated(namespace, list(program.kernels), function_names(kernels), jit, jit_kernels)
     _numba_cache[text] = namespace
     return namespace
+
+
+def function_names(text: str) -> list[str]:
+    """The names of the top-level functions of ``text``, in order."""
+    return [node.name for node in ast.parse(text).body if isinstance(node, ast.FunctionDef)]
+
+
+def jit_generated(namespace: dict, program_names, kernel_names, jit, jit_kernels) -> None:
+    """A generated module's ``namespace`` jitted in place: the program's functions by ``jit``, the
+    backend's ``kernel_names`` by ``jit_kernels(namespace, names)``; its disk caches checked before
+    the first call, when Numba reads its index. What :func:`numba_namespace` does, and a compile
+    helper again for the same module (:func:`import_generated_again`), so that both compile the
+    same functions with the same options."""
+    for name in program_names:
+        namespace[name] = jit(namespace[name])
+    jit_kernels(namespace, kernel_names)
+    _checked_disk_caches(namespace)
 
 
 def cuda_device_function(function):

@@ -82,9 +82,8 @@ def compile_ahead() -> None:
     for module, getter, function, signature, weight in (
             (bvh, "_compiled", bvh._build, bvh.SIGNATURE, 1.5),
             (layout, "_compiled_winding_data", layout._winding_data, layout.WINDING_SIGNATURE, 1.0)):
-        if not ahead.function_on_disk(function):
-            jobs.append((module.AHEAD_JOB, weight, "ndpack.compile_ahead:compile_signature",
-                         [module.__name__, getter, None, signature]))
+        jobs += ahead.job_unless_on_disk(function, module.AHEAD_JOB, weight, "ndpack.compile_ahead:compile_signature",
+                                         [module.__name__, getter, None, signature])
     if ahead.start(jobs, least=2):
         # Its typical time: loading the armadillo on a fresh H100's host took 7.0-7.5 s with helpers, 2-3 s of
         # it reading the file (bench/results/fresh_machine_h100_issue48_step12_turn*_now.json).
