@@ -219,7 +219,7 @@ def main():
     parser.add_argument("--out", default=None, help="write the tables as JSON here")
     parser.add_argument("--spheres", default=None,
                         help="save the first variant's last unprofiled packing here (.npz: centers, radii), "
-                             "to set beside another checkout's")
+                             "to set beside another checkout's; BACKEND in the path is replaced by the backend's name")
     parser.add_argument("--warp-level", type=int, default=None,
                         help="Warp's CUDA optimisation level for ndpack's modules (kernels.compile.WARP_OPTIMIZATION; "
                              "default ndpack's)")
@@ -279,7 +279,7 @@ def main():
                     np.abs(radii - first_radii).max()) if len(radii) == len(first_radii) else None)
                 print(f"   {name} {variant} against {args.variants[0]}: {same}", flush=True)
                 if args.spheres and variant == args.variants[0]:
-                    np.savez(args.spheres, centers=last.centers, radii=last.radii)
+                    np.savez(args.spheres.replace("BACKEND", name), centers=last.centers, radii=last.radii)
             if args.no_profiled:
                 results[key] = dict(spheres=len(last.radii), rounds=len(last.stats.time), fill=last.fill, **same,
                                     unprofiled=timed, median=statistics.median(timed),

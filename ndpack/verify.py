@@ -248,6 +248,15 @@ def verify(packing, shape=None, tol: float | None = None, radii=None, independen
     Verification
         Truthy when valid; ``summary()`` reports the worst violations.
     """
+    return verify_with(packing, shape, tol, radii, independent, centers_only, kind)
+
+
+def verify_with(packing, shape=None, tol: float | None = None, radii=None, independent: bool = False,
+                centers_only: bool | None = None, kind: str | None = None,
+                centre_distances: np.ndarray | None = None) -> Verification:
+    """:func:`verify`, with ``shape``'s signed distance at each centre (n,) float64 already
+    computed (``shape._distance(centers)``, as the greedy driver computes it while its rounds
+    run: :mod:`ndpack.drivers.greedy.centre_distances`), or None to compute it here."""
     if kind is not None and kind not in KINDS:
         raise ParameterError(f"kind must be one of {', '.join(map(repr, KINDS))}, not {kind!r} (a covering is "
                              "checked with nd.check_covering)")
@@ -282,7 +291,9 @@ def verify(packing, shape=None, tol: float | None = None, radii=None, independen
         return Verification(True, 0, tol, -np.inf, -np.inf, np.zeros(0, np.int64), np.zeros((0, 2), np.int64),
                             centers_only=bool(centers_only), from_file=from_file)
     samples_outside = _independent_check(shape, centers, radii, tol) if independent else None
-    poke_out = shape._distance(centers) + (0.0 if centers_only else radii)
+    if centre_distances is None or len(centre_distances) != len(centers):
+        centre_distances = shape._distance(centers)
+    poke_out = centre_distances + (0.0 if centers_only else radii)
     outside = np.flatnonzero(~(poke_out <= tol))  # NaN counts as outside
     pairs, worst_overlap = overlapping_pairs(centers, radii, tol, period_of(shape))
     return Verification(

@@ -42,8 +42,9 @@ from ...reproducible import geometric_schedule, root
 from ...shapes.adapters import as_oracle
 from ...shapes.mesh import recorded_holes
 from ...shapes.plugin import check_plugin_slopes
-from ...verify import DEFAULT_TOLERANCE, overlapping_pairs, verify
+from ...verify import DEFAULT_TOLERANCE, overlapping_pairs, verify, verify_with
 from ..sizes import SizeDistribution
+from .centre_distances import CentreDistances, ahead
 from .rounds import (
     AHEAD_EPS_START,
     FAST_WINDOW,
@@ -282,6 +283,9 @@ class RunState:
             self.image_reach = 0.5 * self.period.shortest - self.margin
             self._obstacles = (np.empty((64, self.dim)), np.empty(64), 0)
         self.searched = None  # how the last final search ended (:meth:`search`), once one ran
+        # The final check's distances at the centres, computed as the spheres arrive (on a GPU,
+        # while the device moves the prototypes: _run_rounds).
+        self.centre_distances = CentreDistances(shape if centers_in is None else centers_in, ahead(backend))
         if obstacles is not None and len(obstacles[1]):
             # Spheres in place from the start (pack's obstacles): neither counted nor returned.
             self.insert(*obstacles, -1, counted=False)
@@ -634,13 +638,17 @@ class RunState:
             self.radii = np.resize(self.radii, capacity)
             self.rounds = np.resize(self.rounds, capacity)
             self.inside = np.resize(self.inside, capacity)
-        inside = np.full(len(radii), counted)
-        if counted and self.centers_in is not None and len(radii):
-            inside = self.centers_in._distance(np.asarray(centers, dtype=np.float64)) < 0
+        inside, known = np.full(len(radii), counted), None
+        if not counted:  # never returned, never checked
+            known = np.full(len(radii), np.nan)
+        elif self.centers_in is not None and len(radii):
+            known = self.centers_in._distance(np.asarray(centers, dtype=np.float64))  # the check's, too
+            inside = known < 0
         self.centers[self.count:needed] = centers
         self.radii[self.count:needed] = radii
         self.rounds[self.count:needed] = round_index
         self.inside[self.count:needed] = inside
+        self.centre_distances.add(self.centers[self.count:needed], known)
         self.inside_count += int(inside.sum())
         self.count = needed  # last, so an interrupt never leaves half a sphere
         return inside
@@ -1065,7 +1073,9 @@ def run(shape, backend, strategy, *, counts, mode, iterations, restarts, seed, n
         shape=shape,
     )
     precision = getattr(backend, "precision", "float64")
-    packing = _ensure_valid(packing, shape, state.margin, precision, on_invalid)
+    distances = state.centre_distances.collect(state.count)
+    packing = _ensure_valid(packing, shape, state.margin, precision, on_invalid,
+                            None if distances is None else distances[inside])
     if obstacles is not None:
         packing = _clear_of(packing, obstacles, state.margin, precision, on_invalid)
     return packing, strategy
@@ -1127,6 +1137,8 @@ def _run_rounds(state, strategy, n, radius_range, fill, volume, started, stats, 
         covered += float(ball_volume(state.dim, radii[inside]).sum())
         if state.inside_count < n:  # nothing to prepare for a round that will not come
             strategy.after_round(state, centers, radii, n - state.inside_count)
+            # A GPU moves the prototypes now, the host waiting: the final check's distances meanwhile.
+            state.centre_distances.catch_up()
         stats.append((time.perf_counter() - started, state.inside_count, covered / volume))
         bar.update(int(inside.sum()))
         bar.set_postfix(fill=f"{covered / volume:.4f}", refresh=False)
@@ -1182,7 +1194,7 @@ def _clear_of(packing: Packing, obstacles, margin: float, precision: str, on_inv
 
 
 def _ensure_valid(packing: Packing, shape: Oracle, margin: float, precision: str = "float64",
-                  on_invalid: str = "repair") -> Packing:
+                  on_invalid: str = "repair", centre_distances: np.ndarray | None = None) -> Packing:
     """Verify in float64; repair (shrink or drop) any sphere that fails, or raise.
 
     With a conservative oracle and a float64 backend this never triggers; it guards against
@@ -1191,8 +1203,10 @@ def _ensure_valid(packing: Packing, shape: Oracle, margin: float, precision: str
     repair is recorded in ``packing.repair`` and announced with a :class:`RepairWarning`.
     Then :func:`~ndpack.consistency.ensure_possible` checks what verification cannot see: a
     plug-in's slope across each sphere, and the spheres' volume against the shape's.
+    ``centre_distances`` (n,) float64: ``shape``'s signed distance at the packing's centres, where
+    the run computed it already (:class:`~ndpack.drivers.greedy.centre_distances.CentreDistances`).
     """
-    report = verify(packing, shape)
+    report = verify_with(packing, shape, centre_distances=centre_distances)
     if report.ok:
         return ensure_possible(packing, shape, on_invalid, margin)
     if precision != "float64":
