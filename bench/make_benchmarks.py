@@ -252,6 +252,15 @@ SOURCES = {
     **{f"hard_h100_{backend}_issue48_step12_turn{turn}.json": Source(
         "H100", "7e5176d (kept aside, not on main)", "git checkout 7e5176d && bash bench/gpu_issue48_step12.sh hard",
         "2026-11-28") for backend in ("warp", "numba_cuda") for turn in (1, 2)},
+    # Issue 48's thirteenth step (the final check's distances while the device moves): bench/gpu_issue48_step13.sh on
+    # one H200 lease, NumPy 2.4 carried, against d9806d9 in turns.
+    **{f"{case}_issue48_step13c_turn{turn}_{version}.json": Source(
+        "H200", commit, f"STEP=step13c bash bench/gpu_issue48_step13.sh {mode}", "2026-11-28")
+       for case, mode in (("armadillo_100k_h200", "check"), ("armadillo_1m_h200_warp", "million"),
+                          ("cube_1m_h200_warp", "million"))
+       for turn in (1, 2) for version, commit in (("base", "d9806d9"), ("now", "9ec2ef8"))},
+    "armadillo_100k_h200_backends_issue48_step13c_now.json": Source(
+        "H200", "9ec2ef8", "STEP=step13c bash bench/gpu_issue48_step13.sh check", "2026-11-28"),
     **{f"fresh_machine_2core_issue48_step12_{version}.json": Source(
         "2 cores", commit, f"{'PYTHONPATH=<4d9dd08' + chr(39) + 's ndpack> ' if version == 'base' else ''}python "
         f"bench/fresh_machine.py --mesh armadillo.obj --backends numba --out "
@@ -583,16 +592,6 @@ def scale_h100() -> list[str]:
         "the time goes, Warp's level 3, numba-cuda's frees) is in the history, and in `docs/design.md`. Warp's peak "
         f"GPU memory at a million (eleventh step): the armadillo {int(peak11['armadillo']):,} MiB, the cube "
         f"{int(peak11['cube']):,} MiB ([output](../bench/results/memory_h100_issue48_step11.txt)).")
-    hard12 = {backend: [load(f"hard_h100_{backend}_issue48_step12_turn{turn}.json") for turn in (1, 2)]
-              for backend in ("warp", "numba_cuda")}
-
-    def hard_pair(backend, variant, stage=None):
-        runs = hard12[backend]
-        if stage is None:  # the move launches' device time, every launch timed (the first turn)
-            kernels = runs[0][f"{backend.replace('_', '-')} {variant}"]["kernels"]
-            return seconds(sum(entry[1] for name, entry in kernels.items() if name.startswith("move_ids")))
-        return ", ".join(seconds(run[f"{backend.replace('_', '-')} {variant}"]["median"]) for run in runs)
-
     final12 = {(turn, version): {row["backend"]: row for row in
                                  load(f"fresh_machine_h100_issue48_step12b_turn{turn}_{version}.json")["rows"]}
                for turn in (1, 2) for version in ("base", "now")}
@@ -604,25 +603,47 @@ def scale_h100() -> list[str]:
     step12 += (
         f" The step's final code (5dba687) on another, slower lease: {final_pair('numba-cuda')} with numba-cuda, "
         f"{final_pair('warp')} with Warp.")
-    step12 += (
-        " **A dead end, kept aside** (7e5176d, not on main): a move launch too large to walk cooperatively moved the "
-        "prototypes of its hard cells (a known wall below W times the cell's longest side) in cooperative blocks "
-        "first, then the others alone. The work model put the plain launches' critical path at 0.82, 0.52, 0.24 and "
-        "0.25 of today's for W = 0.5, 1, 1.5 and 2; on the H100 the move launches took "
-        f"{hard_pair('warp', 'hard-1')} (W = 1) against {hard_pair('warp', 'hard-off')} on Warp, "
-        f"{hard_pair('numba_cuda', 'hard-1')} against {hard_pair('numba_cuda', 'hard-off')} on numba-cuda, and the "
-        f"packing {hard_pair('warp', 'hard-1', 'median')} against {hard_pair('warp', 'hard-off', 'median')} (Warp), "
-        f"{hard_pair('numba_cuda', 'hard-1', 'median')} against {hard_pair('numba_cuda', 'hard-off', 'median')} "
-        "(numba-cuda), every W alike: 20-40% of the moved prototypes are hard by this rule (the work model's run, "
-        "2 cores), thousands of blocks a launch "
-        "that each run a whole move's steps cooperatively, in waves of at most 32 blocks a multiprocessor. The model "
-        "counted only the walks' rounds; it needs a cooperative block's cost per step before the next such trial.")
-    step12_files = [f"fresh_machine_h100_issue48_step12_turn2_{version}.json" for version in ("base", "now")] + [
-        *[f"fresh_machine_h100_issue48_step12b_turn{turn}_{version}.json" for version in ("base", "now")
-          for turn in (1, 2)],
-        *[f"hard_h100_{backend}_issue48_step12_turn{turn}.json"
-          for backend in ("warp", "numba_cuda") for turn in (1, 2)],
-        "armadillo_100k_h100_backends_issue48_step12_now.json"]
+    # Issue 48's thirteenth step: the final check's centre distances while the device moves, in turns with d9806d9.
+    turns13 = {(case, turn, version): load(f"{case}_issue48_step13c_turn{turn}_{version}.json")
+               for case in ("armadillo_100k_h200", "armadillo_1m_h200_warp", "cube_1m_h200_warp")
+               for turn in (1, 2) for version in ("base", "now")}
+    backends13 = load("armadillo_100k_h200_backends_issue48_step13c_now.json")
+
+    def pair13(case, backend, stage=None):
+        def one(version):
+            runs = [turns13[(case, turn, version)][backend] for turn in (1, 2)]
+            return ", ".join(seconds(run["median"] if stage is None else run["stages"][stage]) for run in runs)
+        return f"{one('now')} against {one('base')}"
+
+    step13 = (
+        "**The final check beside the moves** (thirteenth step, one H200 lease of a busy host, in turns with "
+        "d9806d9): on a GPU the check's distances at each round's centres are computed on the host while the device "
+        "runs the round's move launch (`ndpack.drivers.greedy.centre_distances`), and the check at the end is left "
+        "with the overlaps and the last round's centres. The same spheres "
+        "([output](../bench/results/same_spheres_1m_h200_issue48_step13c.txt), "
+        "[100,000](../bench/results/same_spheres_h200_issue48_step13c.txt)). Warp at a million: the armadillo "
+        f"{pair13('armadillo_1m_h200_warp', 'warp')}, its final check "
+        f"{pair13('armadillo_1m_h200_warp', 'warp', 'verify')}; the unit cube {pair13('cube_1m_h200_warp', 'warp')}, "
+        f"its check {pair13('cube_1m_h200_warp', 'warp', 'verify')} "
+        "(mostly the overlaps: a box's distance is cheap). At 100,000 (the armadillo) the final check took "
+        f"{pair13('armadillo_100k_h200', 'warp', 'verify')} on Warp and "
+        f"{pair13('armadillo_100k_h200', 'numba-cuda', 'verify')} on numba-cuda, the whole call "
+        f"{pair13('armadillo_100k_h200', 'warp')} and {pair13('armadillo_100k_h200', 'numba-cuda')}: within the "
+        "lease's noise, in which numba on the host's 16 cores took "
+        f"{seconds(backends13['numba']['median'])} (Warp {seconds(backends13['warp']['median'])}, numba-cuda "
+        f"{seconds(backends13['numba-cuda']['median'])} in the same process), against 4.3-4.4 s on two leases "
+        "earlier that hour (an H100, an H200). Computed in a background thread instead, the check and the round's "
+        "launches took turns at the interpreter's lock, and the packing waited 0.08-0.21 s at the end, more than the "
+        "check saved (not kept). The twelfth step's dead end (the hardest walks first) is in the history.")
+    step13_files = [f"{case}_issue48_step13c_turn{turn}_{version}.json" for version in ("base", "now")
+                    for case in ("armadillo_100k_h200", "armadillo_1m_h200_warp", "cube_1m_h200_warp")
+                    for turn in (1, 2)] + ["armadillo_100k_h200_backends_issue48_step13c_now.json"]
+    # 4d9dd08's runs first, one line; then 19d892d's, one line.
+    step12_files = [*[f"fresh_machine_h100_issue48_step12{step}_turn{turn}_base.json"
+                      for step, turn in (("", 2), ("b", 1), ("b", 2))],
+                    "fresh_machine_h100_issue48_step12_turn2_now.json",
+                    "armadillo_100k_h100_backends_issue48_step12_now.json",
+                    *[f"fresh_machine_h100_issue48_step12b_turn{turn}_now.json" for turn in (1, 2)]]
     step7_files = ["profile_kernels_h100_armadillo_issue48_step7.json"]
     step7_files += [f"{name}_issue48_step7b_now.json" for name in final]
     step7_files += ["work_model_2core_armadillo_100k_issue48_step7.json"]
@@ -694,7 +715,8 @@ def scale_h100() -> list[str]:
         "a grid's sorted rows (Numba), not k-d trees. Cells split finer (ratio 2.5, not 4) filled 0.5% more in 34 "
         "rounds, but took 2.72 s, not 2.07 s ([output](../bench/results/split_ratio_h100_issue48.txt)).",
         step12,
-        *sources(*step12_files, *[f"{case}_1m_h100_backends_issue48_step11_now.json"
+        step13,
+        *sources(*step13_files, *step12_files, *[f"{case}_1m_h100_backends_issue48_step11_now.json"
                                   for case in ("armadillo", "cube", "square")],
                  *step7_files, "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
