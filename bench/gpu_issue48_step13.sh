@@ -7,6 +7,9 @@
 #        three backends in one process (numba on the host's cores) and the device store's tests
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step13.sh million  the armadillo and the unit cube at 1,000,000 on
 #        Warp, this checkout against .gpu2/base in two turns
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step13.sh timeline  where the device waits for the host: the
+#        armadillo at 100,000 on Warp and numba-cuda, every kernel timed by CUPTI through PyTorch's profiler and the
+#        host's driver steps marked (bench/gpu_timeline.py)
 # The files gather in one archive under $OUT (a run brings back few files).
 set -uo pipefail
 source bench/gpu_header.sh
@@ -31,5 +34,21 @@ case "${1:-}" in
     same_spheres "$OUT/same_spheres_1m_${CARD}_issue48_${STEP}.txt" armadillo_1m_warp cube_1m_warp
     tar czf "$FINAL/million_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step13.sh check|million" >&2; exit 2 ;;
+  timeline)
+    gather_in timeline
+    for backend in warp numba-cuda; do
+      timeout 240 python3 bench/gpu_timeline.py --backend $backend --mesh /tmp/armadillo.obj --count 100000 \
+        --out "$OUT/timeline_${CARD}_${backend}_issue48_${STEP}.json" 2>&1 | grep -v "^Warp\|^Module"
+    done
+    tar czf "$FINAL/timeline_${CARD}_issue48_${STEP}.tgz" -C $OUT .
+    ;;
+  launches)
+    # numba-cuda's launches: the host's profile of one packing (what a launch costs in Python)
+    gather_in launches
+    kernels now "launches_${CARD}_numba_cuda_issue48_${STEP}" --backends numba-cuda --mesh /tmp/armadillo.obj \
+      --count 100000 --repeats 1 --host-profile | grep -v "^Warp\|^Module" | head -120 \
+      | tee "$OUT/launches_${CARD}_numba_cuda_issue48_${STEP}.txt"
+    tar czf "$FINAL/launches_${CARD}_issue48_${STEP}.tgz" -C $OUT .
+    ;;
+  *) echo "usage: bash bench/gpu_issue48_step13.sh check|million|timeline|launches" >&2; exit 2 ;;
 esac
