@@ -259,6 +259,9 @@ SOURCES = {
        for case, mode in (("armadillo_100k_h200", "check"), ("armadillo_1m_h200_warp", "million"),
                           ("cube_1m_h200_warp", "million"))
        for turn in (1, 2) for version, commit in (("base", "d9806d9"), ("now", "9ec2ef8"))},
+    **{f"timeline_h100_{backend}_issue48_step13.json": Source(
+        "H100", "651ae88", "bash bench/gpu_issue48_step13.sh timeline", "2026-11-28")
+       for backend in ("warp", "numba-cuda")},
     "armadillo_100k_h200_backends_issue48_step13c_now.json": Source(
         "H200", "9ec2ef8", "STEP=step13c bash bench/gpu_issue48_step13.sh check", "2026-11-28"),
     **{f"fresh_machine_2core_issue48_step12_{version}.json": Source(
@@ -592,17 +595,6 @@ def scale_h100() -> list[str]:
         "the time goes, Warp's level 3, numba-cuda's frees) is in the history, and in `docs/design.md`. Warp's peak "
         f"GPU memory at a million (eleventh step): the armadillo {int(peak11['armadillo']):,} MiB, the cube "
         f"{int(peak11['cube']):,} MiB ([output](../bench/results/memory_h100_issue48_step11.txt)).")
-    final12 = {(turn, version): {row["backend"]: row for row in
-                                 load(f"fresh_machine_h100_issue48_step12b_turn{turn}_{version}.json")["rows"]}
-               for turn in (1, 2) for version in ("base", "now")}
-
-    def final_pair(backend):
-        return (", ".join(seconds(final12[(turn, "now")][backend]["whole_s"]) for turn in (1, 2)) + " against "
-                + ", ".join(seconds(final12[(turn, "base")][backend]["whole_s"]) for turn in (1, 2)))
-
-    step12 += (
-        f" The step's final code (5dba687) on another, slower lease: {final_pair('numba-cuda')} with numba-cuda, "
-        f"{final_pair('warp')} with Warp.")
     # Issue 48's thirteenth step: the final check's centre distances while the device moves, in turns with d9806d9.
     turns13 = {(case, turn, version): load(f"{case}_issue48_step13c_turn{turn}_{version}.json")
                for case in ("armadillo_100k_h200", "armadillo_1m_h200_warp", "cube_1m_h200_warp")
@@ -635,15 +627,34 @@ def scale_h100() -> list[str]:
         "earlier that hour (an H100, an H200). Computed in a background thread instead, the check and the round's "
         "launches took turns at the interpreter's lock, and the packing waited 0.08-0.21 s at the end, more than the "
         "check saved (not kept). The twelfth step's dead end (the hardest walks first) is in the history.")
+    timeline = {backend: load(f"timeline_h100_{backend}_issue48_step13.json") for backend in ("warp", "numba-cuda")}
+
+    def waits(backend, *steps):
+        found = timeline[backend]["idle_by_host_step_s"]
+        return ", ".join(f"{step} {seconds(found.get(step, 0.0))}" for step in steps)
+
+    step13 += (
+        " **Where the device waits** (the armadillo at 100,000, another H100 lease, `bench/gpu_timeline.py`: every "
+        "kernel and copy timed by CUPTI through PyTorch's profiler, the driver's steps marked, each idle moment "
+        f"charged to the host's step then; traced runs of {seconds(timeline['warp']['wall_s'])} and "
+        f"{seconds(timeline['numba-cuda']['wall_s'])}): Warp's device was busy "
+        f"{seconds(timeline['warp']['device_busy_s'])} "
+        f"and idle {seconds(timeline['warp']['device_idle_s'])} ("
+        + waits("warp", "set-up", "launch", "final check", "fetch (sync)", "conflicts", "upload", "choose")
+        + ", the rest in the round's other steps); numba-cuda's busy "
+        f"{seconds(timeline['numba-cuda']['device_busy_s'])}, idle {seconds(timeline['numba-cuda']['device_idle_s'])} ("
+        + waits("numba-cuda", "launch", "upload", "set-up", "check ahead", "neighbours", "fetch (sync)", "conflicts")
+        + "): numba-cuda's launches and uploads cost the host about 0.2 ms and 0.3 ms each in Python "
+        "([profile](../bench/results/launches_h100_numba_cuda_issue48_step13.txt)), and its moves, shorter than "
+        "Warp's, hide less of the final check's distances (check ahead). The host's conflict check (conflicts) is "
+        "the round's largest step of its own, 5-15 ms in the last rounds: what a choice on the device removes.")
     step13_files = [f"{case}_issue48_step13c_turn{turn}_{version}.json" for version in ("base", "now")
                     for case in ("armadillo_100k_h200", "armadillo_1m_h200_warp", "cube_1m_h200_warp")
                     for turn in (1, 2)] + ["armadillo_100k_h200_backends_issue48_step13c_now.json"]
-    # 4d9dd08's runs first, one line; then 19d892d's, one line.
-    step12_files = [*[f"fresh_machine_h100_issue48_step12{step}_turn{turn}_base.json"
-                      for step, turn in (("", 2), ("b", 1), ("b", 2))],
+    # 19d892d's two runs on one line (the final code on a second lease, 5dba687: the history).
+    step12_files = ["fresh_machine_h100_issue48_step12_turn2_base.json",
                     "fresh_machine_h100_issue48_step12_turn2_now.json",
-                    "armadillo_100k_h100_backends_issue48_step12_now.json",
-                    *[f"fresh_machine_h100_issue48_step12b_turn{turn}_now.json" for turn in (1, 2)]]
+                    "armadillo_100k_h100_backends_issue48_step12_now.json"]
     step7_files = ["profile_kernels_h100_armadillo_issue48_step7.json"]
     step7_files += [f"{name}_issue48_step7b_now.json" for name in final]
     step7_files += ["work_model_2core_armadillo_100k_issue48_step7.json"]
@@ -716,7 +727,8 @@ def scale_h100() -> list[str]:
         "rounds, but took 2.72 s, not 2.07 s ([output](../bench/results/split_ratio_h100_issue48.txt)).",
         step12,
         step13,
-        *sources(*step13_files, *step12_files, *[f"{case}_1m_h100_backends_issue48_step11_now.json"
+        *sources(*step13_files, *[f"timeline_h100_{backend}_issue48_step13.json" for backend in ("warp", "numba-cuda")],
+                 *step12_files, *[f"{case}_1m_h100_backends_issue48_step11_now.json"
                                   for case in ("armadillo", "cube", "square")],
                  *step7_files, "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
