@@ -10,8 +10,8 @@ the overlaps and the last round's spheres. A centre's distance is the same funct
 point either way, so the verdict is the same.
 
 In a background thread instead, the host's Python (the round's launches) and the distance
-queries' slices took turns at the interpreter's lock: the armadillo at 100,000 on an H100 waited
-about 0.1 s at the end for the last batches, more than the check saved.
+queries took turns at the interpreter's lock: a packing of the armadillo at 100,000 spheres waited
+0.1-0.2 s at its end for the last batches (an H100 and an H200 lease), more than the check saved.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 
-def ahead(backend) -> bool:
+def during_rounds(backend) -> bool:
     """Whether a run on ``backend`` computes its spheres' centre distances while the device
     works: where launches run beside the host (a GPU); on a CPU the launch is the host's work."""
     return bool(getattr(backend, "launch_bound", False))
@@ -34,7 +34,7 @@ class CentreDistances:
     shape : Oracle
         The final check's shape.
     compute : bool
-        Keep the batches' centres, to compute their distances in :meth:`catch_up` (:func:`ahead`);
+        Keep the batches' centres, to compute their distances in :meth:`catch_up` (:func:`during_rounds`);
         otherwise only the batches given with their distances are kept, and :meth:`collect`
         returns None unless every batch was.
     """

@@ -44,7 +44,7 @@ from ...shapes.mesh import recorded_holes
 from ...shapes.plugin import check_plugin_slopes
 from ...verify import DEFAULT_TOLERANCE, overlapping_pairs, verify, verify_with
 from ..sizes import SizeDistribution
-from .centre_distances import CentreDistances, ahead
+from .centre_distances import CentreDistances, during_rounds
 from .rounds import (
     AHEAD_EPS_START,
     FAST_WINDOW,
@@ -285,7 +285,7 @@ class RunState:
         self.searched = None  # how the last final search ended (:meth:`search`), once one ran
         # The final check's distances at the centres, computed as the spheres arrive (on a GPU,
         # while the device moves the prototypes: _run_rounds).
-        self.centre_distances = CentreDistances(shape if centers_in is None else centers_in, ahead(backend))
+        self.centre_distances = CentreDistances(shape if centers_in is None else centers_in, during_rounds(backend))
         if obstacles is not None and len(obstacles[1]):
             # Spheres in place from the start (pack's obstacles): neither counted nor returned.
             self.insert(*obstacles, -1, counted=False)

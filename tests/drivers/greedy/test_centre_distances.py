@@ -7,7 +7,7 @@ import pytest
 
 import ndpack as nd
 from ndpack.drivers.greedy import protosphere
-from ndpack.drivers.greedy.centre_distances import CentreDistances, ahead
+from ndpack.drivers.greedy.centre_distances import CentreDistances, during_rounds
 
 MESHES = Path(__file__).parents[2] / "data" / "meshes"
 
@@ -39,7 +39,7 @@ def test_distances_computed_during_the_rounds_are_the_checks_own(name, monkeypat
     shape = _shapes()[name]
     plain = nd.pack(shape, 300, mode="fast", backend="numba", seed=1, progress=False)
     spy = _Spy(monkeypatch)
-    monkeypatch.setattr(protosphere, "ahead", lambda backend: True)
+    monkeypatch.setattr(protosphere, "during_rounds", lambda backend: True)
     packing = nd.pack(shape, 300, mode="fast", backend="numba", seed=1, progress=False)
     np.testing.assert_array_equal(packing.centers, plain.centers)
     np.testing.assert_array_equal(packing.radii, plain.radii)
@@ -71,7 +71,7 @@ def test_centres_only_runs_reuse_the_distances_they_sorted_by(monkeypatch):
 def test_a_sphere_placed_outside_is_still_found(monkeypatch):
     # The check's verdict does not trust the driver: a sphere that pokes out (a lying backend,
     # here a shape that shrinks after the run) is repaired from the distances computed ahead.
-    monkeypatch.setattr(protosphere, "ahead", lambda backend: True)
+    monkeypatch.setattr(protosphere, "during_rounds", lambda backend: True)
     spy = _Spy(monkeypatch)
     shape = nd.Box([0, 0], [1, 1])
     insert = protosphere.RunState.insert
@@ -89,7 +89,7 @@ def test_a_sphere_placed_outside_is_still_found(monkeypatch):
 
 
 def test_an_interrupted_run_is_checked_with_the_distances_of_what_it_placed(monkeypatch):
-    monkeypatch.setattr(protosphere, "ahead", lambda backend: True)
+    monkeypatch.setattr(protosphere, "during_rounds", lambda backend: True)
     spy = _Spy(monkeypatch)
 
     def interrupted_in_the_third_round(round):
@@ -133,13 +133,13 @@ def test_a_gpu_computes_them_while_its_device_works():
     class Cpu:
         launch_bound = False
 
-    assert ahead(Gpu()) and not ahead(Cpu()) and not ahead(object())
+    assert during_rounds(Gpu()) and not during_rounds(Cpu()) and not during_rounds(object())
 
 
 def test_each_round_s_distances_are_computed_after_its_moves_are_queued(monkeypatch):
     # The driver asks for them once a round, after the round's work for the device: what waits
     # at the end is the last round's spheres only.
-    monkeypatch.setattr(protosphere, "ahead", lambda backend: True)
+    monkeypatch.setattr(protosphere, "during_rounds", lambda backend: True)
     waiting = []
     collect = CentreDistances.collect
 
