@@ -126,10 +126,10 @@ def count_launches(shape, count, seed):
     launch_seconds = [0.0]  # the launches' within the rounds (the set-up converges through the adapter too)
     check_seconds = [0.0]  # the final check's distances computed in the rounds, while a GPU moves
 
-    def catch_up(self):
+    def catch_up(self, *args, **kwargs):
         started = time.perf_counter()
         try:
-            return saved[3](self)
+            return saved[3](self, *args, **kwargs)
         finally:
             if _in_rounds():
                 check_seconds[0] += time.perf_counter() - started
