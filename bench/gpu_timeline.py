@@ -6,8 +6,9 @@ ran them, and the host's driver steps at the same moments.
 For the GPU machine, whose Python has PyTorch (not a dependency of ndpack): its profiler reads
 CUPTI's record of every kernel, copy and fill in the process, Warp's and numba-cuda's included,
 and the host's steps are marked with ``torch.profiler.record_function`` around the driver's and the
-device store's methods (the marks cost a few microseconds each). The device is idle between its
-activities; each idle moment is charged to the innermost host step under way then. So the table
+device store's methods (the marks and the tracing slow a run down: compare within traced runs).
+The device is idle between its activities; each idle moment is charged to the innermost host
+step under way then. So the table
 says which of the host's steps keep the device waiting, and for how long: what a round on the
 device would remove. The work model (``bench/work_model.py``) counts launches
 and synchronisations on the CPU; this measures their cost on the GPU.
