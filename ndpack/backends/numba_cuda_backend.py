@@ -34,6 +34,7 @@ from .device_spheres import DeviceSpheres
 from .kernel_texts import STORE, portable_text
 from .numba_common import FD_STEP, KERNELS
 from .numba_cuda_lanes import CONVERGE_MOST, COOPERATIVE_MOST, LANES, has_walk, lanes_text, shared_bytes
+from .numba_cuda_launch import Replay
 from .prototypes import SPREAD_MAX, DevicePrototypes, converge_by_move
 
 # The GPU backends' kernels (the prototype store's, the device index's build, clearances, touches, the
@@ -133,6 +134,9 @@ class NumbaCudaBackend(Backend):
         self.cooperative_most = COOPERATIVE_MOST if self.launch_bound else 0
         self.cooperative_converge_most = CONVERGE_MOST if self.launch_bound else 0
         self._simulator = bool(numba.config.ENABLE_CUDASIM)
+        # Launches replayed from their recorded arguments (numba_cuda_launch); the simulator's kernels are not
+        # numba-cuda's compiled ones.
+        self._replay = None if self._simulator else Replay()
         cuda.select_device(self.device)
         self._namespaces = {}  # id(program) -> (program, namespace, whether it walks a tree)
         self._params = weakref.WeakKeyDictionary()  # shape -> its numbers on the device
@@ -194,10 +198,17 @@ class NumbaCudaBackend(Backend):
         tape interpreter's namespace, which the shapes of built-ins share."""
         return self._program_kernels(interpreter(dim))
 
-    def _launch(self, kernel, count, *args, stream=0):
-        if count:
-            blocks = (count + THREADS_PER_BLOCK - 1) // THREADS_PER_BLOCK
-            kernel[blocks, THREADS_PER_BLOCK, stream](*args)
+    def _launch(self, kernel, count, *args, stream=0, threads=THREADS_PER_BLOCK, shared=0, blocks=None):
+        """``count`` items of ``kernel`` in blocks of ``threads`` (or ``blocks`` of them, with ``shared``
+        bytes of shared memory each)."""
+        if blocks is None:
+            blocks = (count + threads - 1) // threads
+        if not blocks:
+            return
+        if self._replay is None:
+            kernel[blocks, threads, stream, shared](*args)
+        else:
+            self._replay.launch(kernel, blocks, threads, stream, args, shared)
 
     def _spheres_and_table(self, centers, radii, neighbours):
         d_centers, d_radii = self._device_spheres(centers, radii)
@@ -400,7 +411,8 @@ class _CudaDevice:
         items = threads // lanes
         most = self.backend.cooperative_most if most is None else most
         if name == "move_ids" and lanes > 1 and 0 < items <= most and self.walks:
-            self.namespace[name][items, LANES, self.stream, shared_bytes()](*args)
+            self.backend._launch(self.namespace[name], items, *args, stream=self.stream, threads=LANES,
+                                 shared=shared_bytes(), blocks=items)
             return
         self.backend._launch(self.namespace[name], threads, *args, stream=self.stream)
 
