@@ -19,6 +19,7 @@ mesh's tree cooperatively in move launches of at most N prototypes (``lanes-off`
 or the set-up's converge; ``converge-off``: not in the set-up's converge; the backend's
 ``cooperative_most`` and ``cooperative_converge_most``, see :mod:`ndpack.backends.warp_lanes`);
 ``share-N``: the lanes agree on the best distance every N rounds (``cooperative_share``);
+``block-N``: a move launch that is not cooperative runs in blocks of N threads (``move_block``);
 ``ahead-whole``: the polish ahead runs the whole polish schedule (``rounds.AHEAD_EPS_START``);
 ``reach-F``: the polish ahead reaches down to F of the frontier (``rounds.POLISH_AHEAD``).
 Each variant's spheres are set beside the first variant's: their count and the largest change of
@@ -51,7 +52,8 @@ VARIANTS = {"now": {}, "no-ahead": {"launch_bound": False}, "spread-1": {"move_s
             **{f"lanes-{most}": {"cooperative_most": most} for most in (1024, 8192, 16384)},
             "lanes-off": {"cooperative_most": 0, "cooperative_converge_most": 0},
             "converge-off": {"cooperative_converge_most": 0},
-            **{f"share-{rounds}": {"cooperative_share": rounds} for rounds in (1, 4, 16)}}
+            **{f"share-{rounds}": {"cooperative_share": rounds} for rounds in (1, 4, 16)},
+            **{f"block-{threads}": {"move_block": threads} for threads in (64, 128, 256, 512)}}
 #: Variants that set ``prototypes.SPREAD_THREADS`` instead: a move launch's most threads.
 THREAD_VARIANTS = {f"threads-2^{bits}": 1 << bits for bits in (15, 16, 18, 19, 20)}
 #: Variants that set the GPU's split ratio (``rounds.SPLIT_RATIO_AHEAD``) instead.
@@ -146,13 +148,15 @@ def install_stages(seconds, sync=lambda: None):
     return undo
 
 
-def launch_kind(name, args):
+def launch_kind(name, args, cooperative=False):
     """A launch's kernel ``name``, with a move launch's kind: a polish, a move that polishes ahead,
     or a move (``args`` of ``move_ids`` end with polish, spread, polish_steps, polish_low, finite
-    where it polishes ahead, and polish_from)."""
+    where it polishes ahead, and polish_from), and `` lanes`` where it is ``cooperative`` (a block of
+    lanes per prototype, where the shape walks a tree)."""
     if name != "move_ids":
         return name
-    return "move_ids[polish]" if args[-5] else "move_ids[move+ahead]" if args[-2] < 1e300 else "move_ids[move]"
+    kind = "move_ids[polish]" if args[-5] else "move_ids[move+ahead]" if args[-2] < 1e300 else "move_ids[move]"
+    return kind + " lanes" if cooperative else kind
 
 
 def _timed_launch(recorder, launch):
@@ -162,7 +166,10 @@ def _timed_launch(recorder, launch):
         started = time.perf_counter()
         launch(self, name, threads, *args, **options)
         self.synchronize()
-        recorder.kernel(launch_kind(name, args), time.perf_counter() - started, threads)
+        lanes, most = options.get("lanes", 1), options.get("most")
+        most = self.backend.cooperative_most if most is None else most
+        recorder.kernel(launch_kind(name, args, lanes > 1 and threads // lanes <= most), time.perf_counter() - started,
+                        threads)
     return wrapper
 
 

@@ -133,6 +133,7 @@ class NumbaCudaBackend(Backend):
         # of LANES threads per item (0: never; see numba_cuda_lanes).
         self.cooperative_most = COOPERATIVE_MOST if self.launch_bound else 0
         self.cooperative_converge_most = CONVERGE_MOST if self.launch_bound else 0
+        self.move_block = THREADS_PER_BLOCK  # threads of a block in a move launch that is not cooperative
         self._simulator = bool(numba.config.ENABLE_CUDASIM)
         # Launches replayed from their recorded arguments (numba_cuda_launch); the simulator's kernels are not
         # numba-cuda's compiled ones.
@@ -414,7 +415,8 @@ class _CudaDevice:
             self.backend._launch(self.namespace[name], items, *args, stream=self.stream, threads=LANES,
                                  shared=shared_bytes(), blocks=items)
             return
-        self.backend._launch(self.namespace[name], threads, *args, stream=self.stream)
+        block = self.backend.move_block if name == "move_ids" else THREADS_PER_BLOCK
+        self.backend._launch(self.namespace[name], threads, *args, stream=self.stream, threads=block)
 
     def spheres(self, centers, radii):
         return self.backend._device_spheres(centers, radii)

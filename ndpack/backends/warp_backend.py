@@ -44,6 +44,11 @@ KERNELS = (Path(__file__).with_name("warp_kernels.py").read_text() + "\n\n"
 FD_STEP = {"float64": 1e-6, "float32": 1e-3}
 #: Radius safety margin as a fraction of the shape's scale, per precision.
 MARGIN = {"float64": 1e-10, "float32": 2e-6}
+#: Threads of a block in a launch of one thread per item (Warp's default).
+THREAD_BLOCK = 256
+#: The same in a move launch that is not cooperative (the backend's ``move_block``; numba-cuda's are
+#: 128 threads: ``bench/profile_kernels.py --variants block-64 block-128 block-256`` compares them).
+MOVE_BLOCK = THREAD_BLOCK
 
 
 class WarpBackend(Backend):
@@ -82,6 +87,7 @@ class WarpBackend(Backend):
         self.cooperative_most = COOPERATIVE_MOST if self.launch_bound else 0
         self.cooperative_converge_most = CONVERGE_MOST if self.launch_bound else 0
         self.cooperative_share = SHARE_EVERY  # rounds between the lanes' agreements (warp_lanes)
+        self.move_block = MOVE_BLOCK  # threads of a block in a move launch that is not cooperative
         self.precision = precision
         self.margin = MARGIN[precision]
         self.float = np.float64 if precision == "float64" else np.float32
@@ -319,9 +325,10 @@ class _WarpDevice:
             if cooperative is not None:
                 self._replay(cooperative, [items, LANES], args, LANES)  # a tiled launch: a block per item
                 return
-        self._replay(getattr(self.module, name), threads, args)
+        self._replay(getattr(self.module, name), threads, args,
+                     self.backend.move_block if name == "move_ids" else THREAD_BLOCK)
 
-    def _replay(self, kernel, dim, args, block_dim=256):
+    def _replay(self, kernel, dim, args, block_dim=THREAD_BLOCK):
         """Launch ``kernel`` over ``dim`` threads with ``args`` by replaying its recorded launch
         (``wp.Launch``), setting again only the arguments that are not the last launch's objects:
         Warp packs every argument of a plain launch, 57 us for a move's 22 against 13 us for a replay

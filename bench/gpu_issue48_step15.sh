@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Issue 48, fifteenth step, on the GPU machine after the set-up runs (../shared/device/README.md):
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step15.sh blocks  the armadillo at 100,000 on Warp and numba-cuda
+#        with a move launch that is not cooperative in blocks of 64, 128 and 256 threads (the backends'
+#        move_block), every launch timed on the device once (move launches split into cooperative and not), then
+#        where the device waits (bench/gpu_timeline.py, the set-up's and the final check's steps marked), then
+#        both beside numba on the host's 16 cores in one process
+# The files gather in one archive under $OUT (a run brings back few files).
+set -uo pipefail
+source bench/gpu_header.sh
+STEP=${STEP:-step15}
+issue48_inputs
+case "${1:-}" in
+  blocks)
+    gather_in blocks
+    for backend in warp numba-cuda; do
+      timeout 200 python3 bench/profile_kernels.py --backends $backend --mesh /tmp/armadillo.obj --count 100000 \
+        --variants now block-64 block-128 block-256 --repeats 3 --stages \
+        --out "$OUT/blocks_${CARD}_${backend}_issue48_${STEP}.json" 2>&1 | grep -v "^Warp\|^Module" \
+        | grep -E "^== |^   (warp|numba-cuda) |move_ids|device kernels"
+    done
+    for backend in warp numba-cuda; do
+      timeout 120 python3 bench/gpu_timeline.py --backend $backend --mesh /tmp/armadillo.obj --count 100000 \
+        --out "$OUT/timeline_${CARD}_${backend}_issue48_${STEP}.json" 2>&1 | grep -v "^Warp\|^Module" | head -30
+    done
+    timeout 150 python3 bench/profile_kernels.py --stages --no-profiled --backends warp numba-cuda numba \
+      --mesh /tmp/armadillo.obj --count 100000 --repeats 3 \
+      --out "$OUT/armadillo_100k_${CARD}_backends_issue48_${STEP}.json" 2>&1 | grep -E "^== |now: " \
+      | grep -v "^Warp\|^Module"
+    tar czf "$FINAL/blocks_${CARD}_issue48_${STEP}.tgz" -C $OUT .
+    ;;
+  *) echo "usage: bash bench/gpu_issue48_step15.sh blocks" >&2; exit 2 ;;
+esac
