@@ -5,6 +5,12 @@
 #        move_block), every launch timed on the device once (move launches split into cooperative and not), then
 #        where the device waits (bench/gpu_timeline.py, the set-up's and the final check's steps marked), then
 #        both beside numba on the host's 16 cores in one process
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step15.sh turns  the armadillo at 100,000 on Warp and numba-cuda
+#        with .gpu2/base's ndpack (git archive BASE ndpack | tar x -C .gpu2/base) and this checkout's in two turns,
+#        their spheres side by side
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step15.sh scale  the armadillo at 100,000 on Warp, numba-cuda and
+#        numba on the host's 16 cores in one process, at a million the GPUs in one and numba in the next, then where
+#        Warp's device waits
 # The files gather in one archive under $OUT (a run brings back few files).
 set -uo pipefail
 source bench/gpu_header.sh
@@ -29,5 +35,25 @@ case "${1:-}" in
       | grep -v "^Warp\|^Module"
     tar czf "$FINAL/blocks_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step15.sh blocks" >&2; exit 2 ;;
+  turns)
+    need_base turns
+    gather_in turns
+    in_turns "armadillo_100k_${CARD}_issue48_${STEP}" armadillo --backends warp numba-cuda --mesh /tmp/armadillo.obj \
+      --count 100000 --repeats 3
+    same_spheres "$OUT/same_spheres_${CARD}_issue48_${STEP}.txt" armadillo_warp armadillo_numba-cuda
+    tar czf "$FINAL/turns_${CARD}_issue48_${STEP}.tgz" -C $OUT .
+    ;;
+  scale)
+    gather_in scale
+    kernels now "armadillo_100k_${CARD}_backends_issue48_${STEP}" --backends warp numba-cuda numba \
+      --mesh /tmp/armadillo.obj --count 100000 --repeats 3 | grep -E "^== |now: "
+    kernels now "armadillo_1m_${CARD}_gpus_issue48_${STEP}" --backends warp numba-cuda \
+      --mesh /tmp/armadillo.obj --count 1000000 --repeats 2 | grep -E "^== |now: "
+    kernels now "armadillo_1m_${CARD}_numba_issue48_${STEP}" --backends numba \
+      --mesh /tmp/armadillo.obj --count 1000000 --repeats 2 | grep -E "^== |now: "
+    timeout 120 python3 bench/gpu_timeline.py --backend warp --mesh /tmp/armadillo.obj --count 100000 \
+      --out "$OUT/timeline_${CARD}_warp_issue48_${STEP}_scale.json" 2>&1 | grep -v "^Warp\|^Module" | head -14
+    tar czf "$FINAL/scale_${CARD}_issue48_${STEP}.tgz" -C $OUT .
+    ;;
+  *) echo "usage: bash bench/gpu_issue48_step15.sh blocks|turns|scale" >&2; exit 2 ;;
 esac

@@ -202,6 +202,37 @@ class Oracle:
     def _distance_and_gradient(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return self._distance(points), self._gradient(points)
 
+    def _step_inside(self, points: np.ndarray, lower: np.ndarray, upper: np.ndarray, steps: int,
+                     margin: float) -> tuple[np.ndarray, np.ndarray]:
+        """Points outside stepped across the boundary, each confined to its box: a relaxed projection.
+
+        A point outside steps ``1.5 * (distance + margin)`` against the gradient, clipped to its box
+        ``lower``, ``upper``, until it is inside or ``steps`` steps are taken (the ProtoSphere
+        driver's start of cells near the boundary: ``RunState._step_in``).
+
+        Parameters
+        ----------
+        points, lower, upper : (k, d) float64
+        steps : int
+        margin : float
+
+        Returns
+        -------
+        points : (k, d) float64 and depth : (k,) float64
+            Where each ended, and its depth (minus the signed distance: positive inside).
+        """
+        trial = points.copy()
+        active = np.arange(len(trial))
+        for _ in range(steps):
+            distance, gradient = self._distance_and_gradient(trial[active])
+            outside = distance >= 0
+            active, distance, gradient = active[outside], distance[outside], gradient[outside]
+            if len(active) == 0:
+                break
+            trial[active] = np.clip(trial[active] - 1.5 * (distance + margin)[:, None] * gradient,
+                                    lower[active], upper[active])
+        return trial, -self._distance(trial)
+
     def _exact_volume(self) -> float | None:
         """Closed-form volume, or None when only a Monte Carlo estimate is possible."""
         return None

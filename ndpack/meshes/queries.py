@@ -45,6 +45,65 @@ def closest_all(first, last, points, prm, limit, signed, out_distance, out_close
         out_distance[i] = -unsigned if inside else unsigned
 
 
+def step_in_all(first, last, points, lower, upper, prm, steps, margin, on_surface, vertices, faces, order,
+                out_points, out_depth):
+    # The loop of Oracle._step_inside, point by point, with closest_all's signed distance and the
+    # mesh's _distance_and_gradient: the same operations in the same order, so the same numbers.
+    scale = prm[2]
+    for i in range(first, last):
+        p = np.empty(3)
+        q = np.empty(3)
+        g = np.empty(3)
+        for j in range(3):
+            p[j] = points[i, j]
+        for _ in range(steps):
+            for j in range(3):
+                q[j] = (p[j] - prm[3 + j]) / scale
+            k = int(nearest_element(q, prm, 0, (1e30 / scale) ** 2))
+            if k < 0:  # no triangle: closest_all's distance 1e30 and no nearest point (unit_rows: the first axis)
+                distance = 1e30
+                g[0], g[1], g[2] = 1.0, 0.0, 0.0
+            else:
+                t = int(prm[8]) + 30 * k
+                unsigned = np.sqrt(triangle_query(q, prm, t, 0)) * scale
+                inside = False
+                if prm[1] == 0.0:
+                    inside = triangle_query(q, prm, t, 1) < 0.0
+                else:
+                    inside = mesh_winding_number(q, prm, 0) > 0.5
+                distance = -unsigned if inside else unsigned
+                if distance < 0.0:
+                    break
+                length = abs(distance)
+                if length <= on_surface:  # no direction: the nearest triangle's normal
+                    face = order[k]
+                    a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
+                    e1 = np.empty(3)
+                    e2 = np.empty(3)
+                    for j in range(3):
+                        e1[j] = vertices[b, j] - vertices[a, j]
+                        e2[j] = vertices[c, j] - vertices[a, j]
+                    g[0] = e1[1] * e2[2] - e1[2] * e2[1]
+                    g[1] = e1[2] * e2[0] - e1[0] * e2[2]
+                    g[2] = e1[0] * e2[1] - e1[1] * e2[0]
+                else:
+                    sign = 1.0 if distance > 0.0 else 0.0
+                    for j in range(3):
+                        g[j] = sign * (p[j] - (triangle_query(q, prm, t, 2 + j) * scale + prm[3 + j])) / length
+                norm = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
+                if norm > 0.0:
+                    for j in range(3):
+                        g[j] = g[j] / norm
+                else:
+                    g[0], g[1], g[2] = 1.0, 0.0, 0.0
+            step = 1.5 * (distance + margin)
+            for j in range(3):
+                p[j] = min(max(p[j] - step * g[j], lower[i, j]), upper[i, j])
+        for j in range(3):
+            out_points[i, j] = p[j]
+        out_depth[i] = -surface_distance(p, prm, 0)
+
+
 def winding_all(first, last, points, prm, out):
     scale = prm[2]
     for i in range(first, last):
@@ -62,9 +121,11 @@ SIGNATURES = {
     "winding_all": "(int64, int64, float64[:, ::1], float64[::1], float64[::1])",
     "closest_all": "(int64, int64, float64[:, ::1], float64[::1], float64, boolean, float64[::1], float64[:, ::1], "
                    "int64[::1])",
+    "step_in_all": "(int64, int64, float64[:, ::1], float64[:, ::1], float64[:, ::1], float64[::1], int64, float64, "
+                   "float64, float64[:, ::1], int64[:, ::1], int64[::1], float64[:, ::1], float64[::1])",
 }
 #: Their first compiles on 2 cores, in seconds (helpers share them by it).
-WEIGHTS = {"signed_all": 3.0, "winding_all": 2.0, "closest_all": 3.0}
+WEIGHTS = {"signed_all": 3.0, "winding_all": 2.0, "closest_all": 3.0, "step_in_all": 3.5}
 
 
 def compile_ahead() -> None:
@@ -156,6 +217,38 @@ def closest(block: np.ndarray, points: np.ndarray, limit: float = np.inf, signed
     limit = min(float(limit), 1e30)
     _run("closest_all", points, block, limit, signed, distance, closest_points, triangle)
     return distance, closest_points, triangle
+
+
+#: A step in costs up to its ``steps`` queries a point: threads pay from fewer points than one query's.
+PARALLEL_FROM_STEP_IN = 64
+
+
+def step_in(block: np.ndarray, points: np.ndarray, lower: np.ndarray, upper: np.ndarray, steps: int, margin: float,
+            on_surface: float, vertices: np.ndarray, faces: np.ndarray, order: np.ndarray):
+    """:meth:`ndpack.Oracle._step_inside` of the mesh packed in ``block``, point by point on threads.
+
+    Parameters
+    ----------
+    points, lower, upper : (k, 3) float64
+        The points and the boxes they stay in.
+    steps : int and margin : float
+        As ``_step_inside`` takes them.
+    on_surface : float
+        A distance up to which a point is on the surface, where the nearest triangle's normal
+        (of ``vertices`` (v, 3) float64, ``faces`` (f, 3) int64 in the block's ``order`` (f,) int64)
+        is the direction.
+
+    Returns
+    -------
+    points : (k, 3) float64 and depth : (k,) float64
+    """
+    k = len(points)
+    out_points, out_depth = np.empty((k, 3)), np.empty(k)
+    run_in_slices(_namespace()["step_in_all"], k, np.ascontiguousarray(points, dtype=np.float64),
+                  np.ascontiguousarray(lower, dtype=np.float64), np.ascontiguousarray(upper, dtype=np.float64), block,
+                  int(steps), float(margin), float(on_surface), vertices, faces, order, out_points, out_depth,
+                  serial_below=PARALLEL_FROM_STEP_IN)
+    return out_points, out_depth
 
 
 def winding_number(block: np.ndarray, points: np.ndarray) -> np.ndarray:

@@ -236,6 +236,15 @@ class TriangleMesh(Oracle):
     def _gradient(self, points: np.ndarray) -> np.ndarray:
         return self._distance_and_gradient(points)[1]
 
+    def _step_inside(self, points, lower, upper, steps, margin):
+        # The base class's loop compiled (ndpack.meshes.queries.step_in), the same numbers: a fast
+        # packing's set-up steps a thousand points of the armadillo 20 times, 24 ms on 2 cores in
+        # NumPy's loop, whose each step is one query of all (a thread's below 1,000 points).
+        return queries.step_in(self._block, points, lower, upper, steps, margin, 1e-12 * self.scale,
+                               np.ascontiguousarray(self.vertices, dtype=np.float64),
+                               np.ascontiguousarray(self.faces, dtype=np.int64),
+                               np.ascontiguousarray(self._order, dtype=np.int64))
+
     def _exact_volume(self):
         return self._volume if self.sign_method == "pseudonormal" else None
 

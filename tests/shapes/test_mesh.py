@@ -408,3 +408,26 @@ def test_the_trees_sort_is_the_stable_argsort():
         for keys in (rng.random(count), rng.integers(0, 3, count).astype(np.float64)):
             np.testing.assert_array_equal(bvh._stable_order(keys), np.argsort(keys, kind="mergesort"))
 
+
+
+# ---------------------------------------------------------------------- stepping in
+@pytest.mark.parametrize("name", ["armadillo-20k", "stanford-bunny-12k"])  # signed by pseudonormals, by winding
+def test_a_mesh_steps_in_as_the_base_class_loop_does(name):
+    """The mesh's compiled step in (queries.step_in) gives the numbers of Oracle._step_inside's NumPy
+    loop over its _distance_and_gradient, to the bit: points outside near the surface, some on it
+    (the nearest triangle's normal), each in a box around it, some boxes too small to reach inside."""
+    mesh = load(name)
+    rng = np.random.default_rng(3)
+    corners = mesh.vertices[mesh.faces[rng.integers(len(mesh.faces), size=600)]]
+    on = np.einsum("fk,fki->fi", rng.dirichlet(np.ones(3), size=len(corners)), corners)
+    points = np.vstack([on[:40], on[40:] + 0.03 * mesh.scale * rng.normal(size=(len(on) - 40, 3))])
+    points = points[mesh.distance(points) >= 0]
+    assert (np.abs(mesh.distance(points)) <= 1e-12 * mesh.scale).sum() >= 10  # on the surface: about half of 40
+    half = rng.uniform(0.001, 0.05, (len(points), 3)) * mesh.scale
+    lower, upper = points - half, points + half
+    got_points, got_depth = mesh._step_inside(points, lower, upper, 20, 1e-8)
+    want_points, want_depth = nd.Oracle._step_inside(mesh, points, lower, upper, 20, 1e-8)
+    assert np.array_equal(got_points, want_points) and np.array_equal(got_depth, want_depth)
+    inside = got_depth > 0
+    assert 0 < inside.sum() < len(points)  # some got in, some could not
+    assert (got_points >= lower).all() and (got_points <= upper).all()

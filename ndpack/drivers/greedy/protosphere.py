@@ -366,20 +366,11 @@ class RunState:
         A prototype's move cannot enter a shape (its steps shrink with the distance), so a point
         outside steps 1.5 times its distance (plus the safety margin) along the gradient, up to
         ``steps`` times (default ``STEP_IN_STEPS``): a relaxed projection, which for a convex
-        part with an interior ends inside. On the host, in float64 (the shape's own
-        ``_distance_and_gradient``): it runs once, for the cells whose starts all lie outside.
+        part with an interior ends inside. On the host, in float64 (the shape's ``_step_inside``: its
+        own ``_distance_and_gradient``, or a mesh's compiled loop): it runs once, for the cells whose
+        starts all lie outside.
         """
-        trial = points.copy()
-        active = np.arange(len(trial))
-        for _ in range(STEP_IN_STEPS if steps is None else steps):
-            distance, gradient = self.shape._distance_and_gradient(trial[active])
-            outside = distance >= 0
-            active, distance, gradient = active[outside], distance[outside], gradient[outside]
-            if len(active) == 0:
-                break
-            trial[active] = np.clip(trial[active] - 1.5 * (distance + self.margin)[:, None] * gradient,
-                                    lower[active], upper[active])
-        return trial, -self.shape._distance(trial)
+        return self.shape._step_inside(points, lower, upper, STEP_IN_STEPS if steps is None else steps, self.margin)
 
     def _find_interior(self, points, clearance, kept, lower, cell_size, counts):
         """Starts inside a shape thinner than a cell, which held none of ``points`` (k, d) (the
