@@ -10,7 +10,7 @@
 #        their spheres side by side
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step15.sh scale  the armadillo at 100,000 on Warp, numba-cuda and
 #        numba on the host's 16 cores in one process, at a million the GPUs in one and numba in the next, then where
-#        Warp's device waits
+#        Warp's device waits, and the final check's overlap search on 1 to 16 threads (bench/verify_speed.py)
 # The files gather in one archive under $OUT (a run brings back few files).
 set -uo pipefail
 source bench/gpu_header.sh
@@ -53,6 +53,8 @@ case "${1:-}" in
       --mesh /tmp/armadillo.obj --count 1000000 --repeats 2 | grep -E "^== |now: "
     timeout 120 python3 bench/gpu_timeline.py --backend warp --mesh /tmp/armadillo.obj --count 100000 \
       --out "$OUT/timeline_${CARD}_warp_issue48_${STEP}_scale.json" 2>&1 | grep -v "^Warp\|^Module" | head -14
+    timeout 120 python3 bench/verify_speed.py --count 100000 --backend warp --mesh /tmp/armadillo.obj --repeats 5 \
+      --out "$OUT/verify_speed_${CARD}_armadillo_100k_issue48_${STEP}.json" 2>&1 | grep -v "^Warp\|^Module"
     tar czf "$FINAL/scale_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
   *) echo "usage: bash bench/gpu_issue48_step15.sh blocks|turns|scale" >&2; exit 2 ;;
