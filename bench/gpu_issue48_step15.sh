@@ -8,6 +8,8 @@
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step15.sh turns  the armadillo at 100,000 on Warp and numba-cuda
 #        with .gpu2/base's ndpack (git archive BASE ndpack | tar x -C .gpu2/base) and this checkout's in two turns,
 #        their spheres side by side
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step15.sh copies  turns (above), then the device store's tests
+#        and numba-cuda's on this GPU (numba-cuda's copies into part of an array through the driver)
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step15.sh scale  the armadillo at 100,000 on Warp, numba-cuda and
 #        numba on the host's 16 cores in one process, at a million the GPUs in one and numba in the next, then where
 #        Warp's device waits, and the final check's overlap search on 1 to 16 threads (bench/verify_speed.py)
@@ -35,13 +37,17 @@ case "${1:-}" in
       | grep -v "^Warp\|^Module"
     tar czf "$FINAL/blocks_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
-  turns)
-    need_base turns
-    gather_in turns
-    in_turns "armadillo_100k_${CARD}_issue48_${STEP}" armadillo --backends warp numba-cuda --mesh /tmp/armadillo.obj \
+  turns|copies)
+    need_base "$1"
+    gather_in "$1"
+    in_turns "armadillo_100k_${CARD}_issue48_${STEP}" armadillo_BACKEND --backends warp numba-cuda --mesh /tmp/armadillo.obj \
       --count 100000 --repeats 3
     same_spheres "$OUT/same_spheres_${CARD}_issue48_${STEP}.txt" armadillo_warp armadillo_numba-cuda
-    tar czf "$FINAL/turns_${CARD}_issue48_${STEP}.tgz" -C $OUT .
+    if [ "$1" = copies ]; then
+      timeout 200 python3 -m pytest -q -p no:cacheprovider tests/backends/test_backends.py tests/backends/test_numba_cuda_launch.py \
+        -k "small_device or fast_mode or conflict or cuda or replay" 2>&1 | tail -4 | tee "$OUT/gpu_tests_${CARD}_issue48_${STEP}.txt"
+    fi
+    tar czf "$FINAL/$1_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
   scale)
     gather_in scale
@@ -57,5 +63,5 @@ case "${1:-}" in
       --out "$OUT/verify_speed_${CARD}_armadillo_100k_issue48_${STEP}.json" 2>&1 | grep -v "^Warp\|^Module"
     tar czf "$FINAL/scale_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step15.sh blocks|turns|scale" >&2; exit 2 ;;
+  *) echo "usage: bash bench/gpu_issue48_step15.sh blocks|turns|copies|scale" >&2; exit 2 ;;
 esac
