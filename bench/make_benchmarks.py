@@ -264,6 +264,23 @@ SOURCES = {
        for backend in ("warp", "numba-cuda")},
     "armadillo_100k_h200_backends_issue48_step13c_now.json": Source(
         "H200", "9ec2ef8", "STEP=step13c bash bench/gpu_issue48_step13.sh check", "2026-11-28"),
+    # Issue 48's fourteenth step (host work off the GPU's path): bench/gpu_issue48_step15.sh on H200 leases, NumPy
+    # 2.4 carried: move block sizes and where the device waits (2c5acdd), the set-up's step in against 2c5acdd and
+    # numba-cuda's copies against 2ee5c62 in turns, then the final code beside numba (cf4f8d3).
+    **{f"{kind}_h200_{backend}_issue48_step15.json": Source(
+        "H200", "2c5acdd", "bash bench/gpu_issue48_step15.sh blocks", "2026-11-28")
+       for kind in ("blocks", "timeline") for backend in ("warp", "numba-cuda")},
+    **{f"armadillo_100k_h200_issue48_step15_turn{turn}_{version}.json": Source(
+        "H200", commit, "bash bench/gpu_issue48_step15.sh turns", "2026-11-28")
+       for turn in (1, 2) for version, commit in (("base", "2c5acdd"), ("now", "f47f805"))},
+    **{f"armadillo_100k_h200_issue48_step15b_turn{turn}_{version}.json": Source(
+        "H200", commit, "STEP=step15b bash bench/gpu_issue48_step15.sh copies", "2026-11-28")
+       for turn in (1, 2) for version, commit in (("base", "2ee5c62"), ("now", "cf4f8d3"))},
+    **{name: Source("H200", "cf4f8d3", "STEP=step15b bash bench/gpu_issue48_step15.sh scale", "2026-11-28")
+       for name in ("armadillo_100k_h200_backends_issue48_step15b_now.json",
+                    "armadillo_1m_h200_gpus_issue48_step15b_now.json",
+                    "armadillo_1m_h200_numba_issue48_step15b_now.json", "timeline_h200_warp_issue48_step15b_scale.json",
+                    "verify_speed_h200_armadillo_100k_issue48_step15b.json")},
     **{f"fresh_machine_2core_issue48_step12_{version}.json": Source(
         "2 cores", commit, f"{'PYTHONPATH=<4d9dd08' + chr(39) + 's ndpack> ' if version == 'base' else ''}python "
         f"bench/fresh_machine.py --mesh armadillo.obj --backends numba --out "
@@ -549,113 +566,76 @@ def scale_h100() -> list[str]:
         "armadillo_1m_h100", "cube_1m_h100", "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")}
     # Issue 48's eleventh step, one H100 lease with NumPy 2.4 carried: the three backends in one process at
     # 100,000; Warp and numba-cuda at a million on the next lease.
-    backends12 = load("armadillo_100k_h100_backends_issue48_step12_now.json")
-    arm5, arm5_cuda, arm5_cpu = backends12["warp"], backends12["numba-cuda"], backends12["numba"]
+    # Issue 48's fourteenth step: the armadillo's rows, the three backends on one H200 lease (cf4f8d3).
+    backends15 = load("armadillo_100k_h200_backends_issue48_step15b_now.json")
+    arm5, arm5_cuda, arm5_cpu = backends15["warp"], backends15["numba-cuda"], backends15["numba"]
+    gpus_1m = load("armadillo_1m_h200_gpus_issue48_step15b_now.json")
+    arm_1m, arm_1m_cuda = gpus_1m["warp"], gpus_1m["numba-cuda"]
+    arm_1m_cpu = load("armadillo_1m_h200_numba_issue48_step15b_now.json")["numba"]
     million11 = {case: load(f"{case}_1m_h100_backends_issue48_step11_now.json")
                  for case in ("armadillo", "cube", "square")}
     cube_1m, cube_1m_cpu = final["cube_1m_h100"]["warp"], final["cube_1m_h100host_numba"]["numba"]
     square_1m, square_1m_cpu = final["square_1m_h100"]["warp"], final["square_1m_h100host_numba"]["numba"]
     peak11 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
                              (RESULTS / "memory_h100_issue48_step11.txt").read_text()))
-    # Issue 48's twelfth step: compile helpers; a fresh machine's first packing in turns with 4d9dd08, the three
-    # backends again in one process.
-    fresh12 = {(turn, version): {row["backend"]: row for row in
-                                 load(f"fresh_machine_h100_issue48_step12_turn{turn}_{version}.json")["rows"]}
+    # Issue 48's fourteenth step: host work off the GPU's path (the set-up's step in, numba-cuda's copies), in turns.
+    step_in = {(turn, version): load(f"armadillo_100k_h200_issue48_step15_turn{turn}_{version}.json")
                for turn in (1, 2) for version in ("base", "now")}
+    copies = {(turn, version): load(f"armadillo_100k_h200_issue48_step15b_turn{turn}_{version}.json")
+              for turn in (1, 2) for version in ("base", "now")}
+    blocks = {backend: load(f"blocks_h200_{backend}_issue48_step15.json")[f"{backend} now"]["kernels"]
+              for backend in ("warp", "numba-cuda")}
+    waits15 = load("timeline_h200_warp_issue48_step15b_scale.json")
+    pairs15 = load("verify_speed_h200_armadillo_100k_issue48_step15b.json")["rows"][0]
 
-    def compiled_here(version):
-        return ", ".join(str(sum(fresh12[(turn, version)]["numba-cuda"]["compiled_here"].get(kind, 0)
-                                 for kind in ("numba", "numba-cuda"))) for turn in (1, 2))
-
-    def fresh_pair(backend, key):
-        return (", ".join(seconds(fresh12[(turn, "now")][backend][key]) for turn in (1, 2)) + " against "
-                + ", ".join(seconds(fresh12[(turn, "base")][backend][key]) for turn in (1, 2)))
-
-    step12 = (
-        "**Compile helpers** (twelfth step, one H100 lease, in turns with 4d9dd08): a fresh machine's first packing "
-        "of the armadillo (3 spheres, every cache empty, `bench/fresh_machine.py`), from `import ndpack` to the "
-        f"spheres, took {fresh_pair('numba-cuda', 'whole_s')} with numba-cuda and {fresh_pair('warp', 'whole_s')} "
-        f"with Warp (goal: 30 s); loading the mesh {fresh_pair('numba-cuda', 'load_s')} (numba-cuda's runs) and "
-        f"{fresh_pair('warp', 'load_s')} (Warp's). The kernels compiled in helper processes side by side, the "
-        "packing's process compiled none (numba-cuda's runs, its Numba and numba-cuda compiles: "
-        f"{compiled_here('now')} against {compiled_here('base')}). Most of the gain is the CPU's compiles (the "
-        "mesh's at load, the checks' grids): numba-cuda's kernels kept the packing waiting "
-        + ", ".join(seconds(fresh12[(turn, "now")]["numba-cuda"]["compile_times"]["numba-cuda: meshes"])
-                    for turn in (1, 2))
-        + " against " + ", ".join(
-            seconds(fresh12[(turn, "base")]["numba-cuda"]["compile_times"]["numba-cuda: meshes"]) for turn in (1, 2))
-        + " in one process, since the move kernel's helper compiles the mesh's walk again, after its own start "
-        "(Python, numba-cuda, a CUDA context). "
-        "The packing is unchanged: numba-cuda's 100,000 spheres are 4d9dd08's "
-        "([output](../bench/results/same_spheres_h100_issue48_step12.txt)); in one process numba-cuda "
-        f"{seconds(backends12['numba-cuda']['median'])}, Warp {seconds(backends12['warp']['median'])}, numba on the "
-        f"host's 16 cores {seconds(backends12['numba']['median'])} "
-        f"({backends12['numba']['median'] / backends12['numba-cuda']['median']:.1f}x, "
-        f"{backends12['numba']['median'] / backends12['warp']['median']:.1f}x). The eleventh step's paragraph (where "
-        "the time goes, Warp's level 3, numba-cuda's frees) is in the history, and in `docs/design.md`. Warp's peak "
-        f"GPU memory at a million (eleventh step): the armadillo {int(peak11['armadillo']):,} MiB, the cube "
-        f"{int(peak11['cube']):,} MiB ([output](../bench/results/memory_h100_issue48_step11.txt)).")
-    # Issue 48's thirteenth step: the final check's centre distances while the device moves, in turns with d9806d9.
-    turns13 = {(case, turn, version): load(f"{case}_issue48_step13c_turn{turn}_{version}.json")
-               for case in ("armadillo_100k_h200", "armadillo_1m_h200_warp", "cube_1m_h200_warp")
-               for turn in (1, 2) for version in ("base", "now")}
-    backends13 = load("armadillo_100k_h200_backends_issue48_step13c_now.json")
-
-    def pair13(case, backend, stage=None):
+    def in_turns(runs, backend, stage=None):
         def one(version):
-            runs = [turns13[(case, turn, version)][backend] for turn in (1, 2)]
-            return ", ".join(seconds(run["median"] if stage is None else run["stages"][stage]) for run in runs)
+            return ", ".join(seconds(runs[(turn, version)][backend]["median"] if stage is None
+                                     else runs[(turn, version)][backend]["stages"][stage]) for turn in (1, 2))
         return f"{one('now')} against {one('base')}"
 
-    step13 = (
-        "**The final check beside the moves** (thirteenth step, one H200 lease of a busy host, in turns with "
-        "d9806d9): on a GPU the check's distances at each round's centres are computed on the host while the device "
-        "runs the round's move launch (`ndpack.drivers.greedy.centre_distances`), and the check at the end is left "
-        "with the overlaps and the last round's centres. The same spheres "
-        "([output](../bench/results/same_spheres_1m_h200_issue48_step13c.txt), "
-        "[100,000](../bench/results/same_spheres_h200_issue48_step13c.txt)). Warp at a million: the armadillo "
-        f"{pair13('armadillo_1m_h200_warp', 'warp')}, its final check "
-        f"{pair13('armadillo_1m_h200_warp', 'warp', 'verify')}; the unit cube {pair13('cube_1m_h200_warp', 'warp')}, "
-        f"its check {pair13('cube_1m_h200_warp', 'warp', 'verify')} "
-        "(mostly the overlaps: a box's distance is cheap). At 100,000 (the armadillo) the final check took "
-        f"{pair13('armadillo_100k_h200', 'warp', 'verify')} on Warp and "
-        f"{pair13('armadillo_100k_h200', 'numba-cuda', 'verify')} on numba-cuda, the whole call "
-        f"{pair13('armadillo_100k_h200', 'warp')} and {pair13('armadillo_100k_h200', 'numba-cuda')}: within the "
-        "lease's noise, in which numba on the host's 16 cores took "
-        f"{seconds(backends13['numba']['median'])} (Warp {seconds(backends13['warp']['median'])}, numba-cuda "
-        f"{seconds(backends13['numba-cuda']['median'])} in the same process), against 4.3-4.4 s on two leases "
-        "earlier that hour (an H100, an H200). Computed in a background thread instead, the check and the round's "
-        "launches took turns at the interpreter's lock, and the packing waited 0.08-0.21 s at the end, more than the "
-        "check saved (not kept). The twelfth step's dead end (the hardest walks first) is in the history.")
-    timeline = {backend: load(f"timeline_h100_{backend}_issue48_step13.json") for backend in ("warp", "numba-cuda")}
+    def move_ms(backend, kind):
+        calls, total = blocks[backend][kind][:2]
+        return f"{1e3 * total / calls:.1f} ms"
 
-    def waits(backend, *steps):
-        found = timeline[backend]["idle_by_host_step_s"]
-        return ", ".join(f"{step} {seconds(found.get(step, 0.0))}" for step in steps)
-
-    step13 += (
-        " **Where the device waits** (the armadillo at 100,000, another H100 lease, `bench/gpu_timeline.py`: every "
-        "kernel and copy timed by CUPTI through PyTorch's profiler, the driver's steps marked, each idle moment "
-        f"charged to the host's step then; traced runs of {seconds(timeline['warp']['wall_s'])} and "
-        f"{seconds(timeline['numba-cuda']['wall_s'])}): Warp's device was busy "
-        f"{seconds(timeline['warp']['device_busy_s'])} "
-        f"and idle {seconds(timeline['warp']['device_idle_s'])} ("
-        + waits("warp", "set-up", "launch", "final check", "fetch (sync)", "conflicts", "upload", "choose")
-        + ", the rest in the round's other steps); numba-cuda's busy "
-        f"{seconds(timeline['numba-cuda']['device_busy_s'])}, idle {seconds(timeline['numba-cuda']['device_idle_s'])} ("
-        + waits("numba-cuda", "launch", "upload", "set-up", "check ahead", "neighbours", "fetch (sync)", "conflicts")
-        + "): numba-cuda's device waited about 0.2 ms a launch and 0.3 ms an upload (975 launches and 394 uploads "
-        "a packing: [profile](../bench/results/launches_h100_numba_cuda_issue48_step13.txt)), and its moves, shorter "
-        "than "
-        "Warp's, hide less of the final check's distances (check ahead). The host's conflict check (conflicts) is "
-        "the round's largest step of its own, 5-15 ms in the last rounds: what a choice on the device removes.")
-    step13_files = [f"{case}_issue48_step13c_turn{turn}_{version}.json" for version in ("base", "now")
-                    for case in ("armadillo_100k_h200", "armadillo_1m_h200_warp", "cube_1m_h200_warp")
-                    for turn in (1, 2)] + ["armadillo_100k_h200_backends_issue48_step13c_now.json"]
-    # 19d892d's two runs on one line (the final code on a second lease, 5dba687: the history).
-    step12_files = ["fresh_machine_h100_issue48_step12_turn2_base.json",
-                    "fresh_machine_h100_issue48_step12_turn2_now.json",
-                    "armadillo_100k_h100_backends_issue48_step12_now.json"]
+    step14 = (
+        "**Host work off the GPU's path** (fourteenth step, H200 leases, `bash bench/gpu_issue48_step15.sh`): "
+        "a mesh steps its set-up's boundary cells in by a compiled loop on threads (`queries.step_in`, the numbers of "
+        "NumPy's loop to the bit), and numba-cuda copies into part of an array by one driver call. In turns, the "
+        f"set-up took {in_turns(step_in, 'warp', 'setup')} on Warp and {in_turns(step_in, 'numba-cuda', 'setup')} on "
+        "numba-cuda (the whole call "
+        f"{in_turns(step_in, 'warp')} and {in_turns(step_in, 'numba-cuda')}); numba-cuda's rounds then took "
+        f"{in_turns(copies, 'numba-cuda', 'rounds')}, the whole call {in_turns(copies, 'numba-cuda')}, the same "
+        "spheres ([output](../bench/results/same_spheres_h200_issue48_step15b.txt); the device store's tests pass "
+        "on the GPU: [output](../bench/results/gpu_tests_h200_issue48_step15b.txt)). numba-cuda's launches are "
+        "replayed from their recorded arguments (the thirteenth step's branch, in turns with two others that did "
+        "not pay: the history). The same move launches took Warp "
+        f"{move_ms('warp', 'move_ids[move+ahead]')} and numba-cuda {move_ms('numba-cuda', 'move_ids[move+ahead]')} "
+        f"each on the device in threads of their own, {move_ms('warp', 'move_ids[move+ahead] lanes')} and "
+        f"{move_ms('numba-cuda', 'move_ids[move+ahead] lanes')} in cooperative blocks, whatever the block of the "
+        "former (64, 128 or 256 threads: `--variants block-N`): Warp's code of the same walk is slower. Where "
+        f"Warp's device still waits (a traced run of {seconds(waits15['wall_s'])}: busy "
+        f"{seconds(waits15['device_busy_s'])}, idle {seconds(waits15['device_idle_s'])}): "
+        + ", ".join(f"{step} {seconds(value)}" for step, value in list(waits15["idle_by_host_step_s"].items())[:6])
+        + "; the final check's overlap search took "
+        + ", ".join(f"{1e3 * pairs15[f'pairs_{threads}_threads_s']:.0f} ms" for threads in (1, 4, 8, 16))
+        + " on 1, 4, 8 and 16 of the host's threads (`bench/verify_speed.py`): little gains past 8. Warp's peak GPU "
+        f"memory at a million (eleventh step): the armadillo {int(peak11['armadillo']):,} MiB, the cube "
+        f"{int(peak11['cube']):,} MiB ([output](../bench/results/memory_h100_issue48_step11.txt)).")
+    step14_files = ["blocks_h200_warp_issue48_step15.json", "blocks_h200_numba-cuda_issue48_step15.json",
+                    "armadillo_100k_h200_issue48_step15_turn1_base.json",
+                    "armadillo_100k_h200_issue48_step15_turn2_base.json",
+                    "armadillo_100k_h200_issue48_step15_turn1_now.json",
+                    "armadillo_100k_h200_issue48_step15_turn2_now.json",
+                    "armadillo_100k_h200_issue48_step15b_turn1_base.json",
+                    "armadillo_100k_h200_issue48_step15b_turn2_base.json",
+                    "armadillo_100k_h200_issue48_step15b_turn1_now.json",
+                    "armadillo_100k_h200_issue48_step15b_turn2_now.json",
+                    "armadillo_100k_h200_backends_issue48_step15b_now.json",
+                    "armadillo_1m_h200_gpus_issue48_step15b_now.json",
+                    "armadillo_1m_h200_numba_issue48_step15b_now.json",
+                    "timeline_h200_warp_issue48_step15b_scale.json",
+                    "verify_speed_h200_armadillo_100k_issue48_step15b.json"]
     step7_files = ["profile_kernels_h100_armadillo_issue48_step7.json"]
     step7_files += [f"{name}_issue48_step7b_now.json" for name in final]
     step7_files += ["work_model_2core_armadillo_100k_issue48_step7.json"]
@@ -683,11 +663,11 @@ def scale_h100() -> list[str]:
              for name, old, new7, model7_ in zip(names, parts(before), parts(arm7_profiled), guess7)]
     rows = [
         ["armadillo (100k triangles)", "100,000", seconds(arm5["median"]), seconds(arm5_cuda["median"]),
-         seconds(arm5_cpu["median"]), f"{arm5['fill']:.4f}", "medians of 3, 19d892d (NumPy 2.4)"],
+         seconds(arm5_cpu["median"]), f"{arm5['fill']:.4f}", "medians of 3, cf4f8d3 (H200)"],
         ["unit cube", "100,000", *[seconds(median_of(cube, backend=b)) for b in ("warp", "numba-cuda", "numba")],
          f"{median_of(cube, 'fill', backend='warp'):.4f}", "medians of 2, 4ea141e"],
-        ["armadillo (100k triangles)", "1,000,000", now_1m("armadillo", "warp"), now_1m("armadillo", "numba-cuda"), "",
-         f"{million11['armadillo']['warp']['fill']:.4f}", "medians of 2, a89e925"],
+        ["armadillo (100k triangles)", "1,000,000", seconds(arm_1m["median"]), seconds(arm_1m_cuda["median"]),
+         seconds(arm_1m_cpu["median"]), f"{arm_1m['fill']:.4f}", "medians of 2, cf4f8d3 (H200)"],
         ["unit cube", "1,000,000", now_1m("cube", "warp"), now_1m("cube", "numba-cuda"), seconds(cube_1m_cpu["median"]),
          f"{million11['cube']['warp']['fill']:.4f}", "medians of 2, a89e925 (numba: one run, 1e767cb)"],
         ["unit square", "1,000,000", now_1m("square", "warp"), now_1m("square", "numba-cuda"),
@@ -705,12 +685,15 @@ def scale_h100() -> list[str]:
         "",
         "Fast mode, seed 0: seconds of the whole `nd.pack` call, the final float64 check included, the compile apart",
         "(a warm-up packing first). numba-cuda needs NumPy 2.4, carried to the GPU machine (its image's 2.5 breaks "
-        "numba-cuda's CUDA target): it was not run from 3ffe337 to 9d800f2. The GPUs' figures at a million are of the "
-        "lease after the 100,000's; numba's at a million of an earlier one, beside Warp's of then.",
+        "numba-cuda's CUDA target): it was not run from 3ffe337 to 9d800f2. The armadillo's rows are of one H200 lease "
+        "(at 100,000 the three backends in one process; at a million the GPUs in one, numba in the next); the cube's "
+        "and the square's of H100 leases, numba's at a million of an earlier one, beside Warp's of then.",
         "",
         *table(head, rows),
-        f"Warp is {arm5_cpu['median'] / arm5['median']:.1f}x the host's 16 cores on the armadillo at "
-        f"100,000 (numba-cuda {arm5_cpu['median'] / arm5_cuda['median']:.1f}x), "
+        f"Warp is {arm5_cpu['median'] / arm5['median']:.2f}x the host's 16 cores on the armadillo at "
+        f"100,000 (numba-cuda {arm5_cpu['median'] / arm5_cuda['median']:.2f}x) and "
+        f"{arm_1m_cpu['median'] / arm_1m['median']:.1f}x at a million (numba-cuda "
+        f"{arm_1m_cpu['median'] / arm_1m_cuda['median']:.1f}x), "
         f"{cube_1m_cpu['median'] / cube_1m['median']:.1f}x on the cube and "
         f"{square_1m_cpu['median'] / square_1m['median']:.1f}x on the square at a million (1e767cb's Warp, "
         f"{seconds(cube_1m['median'])} and {seconds(square_1m['median'])}, in numba's run; goals: 5x; 1 s, 8 s, 5 s). "
@@ -726,11 +709,8 @@ def scale_h100() -> list[str]:
         f"node); the host's round takes {gpu['host_over_cpu']:.1f}x its 2-core time. The final check finds overlaps in "
         "a grid's sorted rows (Numba), not k-d trees. Cells split finer (ratio 2.5, not 4) filled 0.5% more in 34 "
         "rounds, but took 2.72 s, not 2.07 s ([output](../bench/results/split_ratio_h100_issue48.txt)).",
-        step12,
-        step13,
-        *sources(*step13_files, *[f"timeline_h100_{backend}_issue48_step13.json" for backend in ("warp", "numba-cuda")],
-                 *step12_files, *[f"{case}_1m_h100_backends_issue48_step11_now.json"
-                                  for case in ("armadillo", "cube", "square")],
+        step14,
+        *sources(*step14_files, *[f"{case}_1m_h100_backends_issue48_step11_now.json" for case in ("cube", "square")],
                  *step7_files, "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
                  "policy_fill_2core_10k.json"),
