@@ -10,6 +10,10 @@
 #        their spheres side by side
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step15.sh copies  turns (above), then the device store's tests
 #        and numba-cuda's on this GPU (numba-cuda's copies into part of an array through the driver)
+#   source .gpu2/setup.sh && bash bench/gpu_issue48_step15.sh stack  Warp's move launches on the armadillo at 100,000
+#        with Warp as installed and with a copy whose vec_t() leaves its components unset (an experiment, not a fix:
+#        every stack() of a walk is a 64-int vec_t, which Warp's generated code zeroes at each call, a 256-byte
+#        loop of byte stores in the PTX), each with its own kernel cache, every launch timed once
 #   source .gpu2/setup.sh && bash bench/gpu_issue48_step15.sh scale  the armadillo at 100,000 on Warp, numba-cuda and
 #        numba on the host's 16 cores in one process, at a million the GPUs in one and numba in the next, then where
 #        Warp's device waits, and the final check's overlap search on 1 to 16 threads (bench/verify_speed.py)
@@ -49,6 +53,35 @@ case "${1:-}" in
     fi
     tar czf "$FINAL/$1_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
+  stack)
+    gather_in stack
+    site=$(python3 -c "import warp, os; print(os.path.dirname(os.path.dirname(warp.__file__)))" 2>/dev/null | tail -1)
+    rm -rf /tmp/warp-noinit && mkdir -p /tmp/warp-noinit && cp -r "$site/warp" /tmp/warp-noinit/
+    python3 - <<'PY'
+from pathlib import Path
+header = Path("/tmp/warp-noinit/warp/native/vec.h")
+text = header.read_text()
+old = "    inline CUDA_CALLABLE vec_t()\n        : c()\n    {\n    }"
+assert old in text, "vec.h: the default constructor is not as expected"
+header.write_text(text.replace(old, "    inline CUDA_CALLABLE vec_t() {}"))
+print("patched", header)
+PY
+    for version in installed noinit; do
+      path=$PYTHONPATH
+      [ $version = noinit ] && path=/tmp/warp-noinit:$PYTHONPATH
+      PYTHONPATH=$path NDPACK_CACHE=/tmp/cache-$version WARP_CACHE_PATH=/tmp/cache-$version/warp timeout 200 \
+        python3 bench/profile_kernels.py --backends warp --mesh /tmp/armadillo.obj --count 100000 --repeats 2 \
+        --stages --spheres "/tmp/armadillo_stack_$version.npz" \
+        --out "$OUT/stack_${CARD}_warp_${version}_issue48_${STEP}.json" 2>&1 | grep -v "^Warp\|^Module" \
+        | grep -E "^== |^   warp |move_ids|device kernels"
+    done
+    python3 -c "
+import numpy as np
+a, b = (np.load(f'/tmp/armadillo_stack_{v}.npz') for v in ('installed', 'noinit'))
+print('same spheres:', len(a['radii']) == len(b['radii']) and bool((a['radii'] == b['radii']).all()))" \
+      | tee "$OUT/stack_same_spheres_${CARD}_issue48_${STEP}.txt"
+    tar czf "$FINAL/stack_${CARD}_issue48_${STEP}.tgz" -C $OUT .
+    ;;
   scale)
     gather_in scale
     kernels now "armadillo_100k_${CARD}_backends_issue48_${STEP}" --backends warp numba-cuda numba \
@@ -63,5 +96,5 @@ case "${1:-}" in
       --out "$OUT/verify_speed_${CARD}_armadillo_100k_issue48_${STEP}.json" 2>&1 | grep -v "^Warp\|^Module"
     tar czf "$FINAL/scale_${CARD}_issue48_${STEP}.tgz" -C $OUT .
     ;;
-  *) echo "usage: bash bench/gpu_issue48_step15.sh blocks|turns|copies|scale" >&2; exit 2 ;;
+  *) echo "usage: bash bench/gpu_issue48_step15.sh blocks|turns|copies|stack|scale" >&2; exit 2 ;;
 esac
