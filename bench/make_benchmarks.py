@@ -270,6 +270,9 @@ SOURCES = {
     **{f"{kind}_h200_{backend}_issue48_step15.json": Source(
         "H200", "2c5acdd", "bash bench/gpu_issue48_step15.sh blocks", "2026-11-28")
        for kind in ("blocks", "timeline") for backend in ("warp", "numba-cuda")},
+    **{f"stack_h200_warp_{version}_issue48_step15.json": Source(
+        "H200", "2aa7e1f", "bash bench/gpu_issue48_step15.sh stack", "2026-11-28")
+       for version in ("installed", "noinit")},
     **{f"armadillo_100k_h200_issue48_step15_turn{turn}_{version}.json": Source(
         "H200", commit, "bash bench/gpu_issue48_step15.sh turns", "2026-11-28")
        for turn in (1, 2) for version, commit in (("base", "2c5acdd"), ("now", "f47f805"))},
@@ -594,6 +597,13 @@ def scale_h100() -> list[str]:
                                      else runs[(turn, version)][backend]["stages"][stage]) for turn in (1, 2))
         return f"{one('now')} against {one('base')}"
 
+    stack = {version: load(f"stack_h200_warp_{version}_issue48_step15.json")["warp"]["kernels"]
+             for version in ("installed", "noinit")}
+
+    def stack_ms(version, kind):
+        calls, total = stack[version][kind][:2]
+        return f"{1e3 * total / calls:.1f} ms"
+
     def move_ms(backend, kind):
         calls, total = blocks[backend][kind][:2]
         return f"{1e3 * total / calls:.1f} ms"
@@ -613,7 +623,13 @@ def scale_h100() -> list[str]:
         f"{move_ms('warp', 'move_ids[move+ahead]')} and numba-cuda {move_ms('numba-cuda', 'move_ids[move+ahead]')} "
         f"each on the device in threads of their own, {move_ms('warp', 'move_ids[move+ahead] lanes')} and "
         f"{move_ms('numba-cuda', 'move_ids[move+ahead] lanes')} in cooperative blocks, whatever the block of the "
-        "former (64, 128 or 256 threads: `--variants block-N`): Warp's code of the same walk is slower. Where "
+        "former (64, 128 or 256 threads: `--variants block-N`): Warp's code of the same walk is slower. Not for "
+        "zeroing each walk's stack (a 64-int `vec_t`, zeroed at every call by a 256-byte loop of byte stores in the "
+        "PTX): with `vec_t()` left unset (a patched copy of Warp; the same spheres: "
+        "[output](../bench/results/stack_same_spheres_h200_issue48_step15.txt)) they took "
+        f"{stack_ms('noinit', 'move_ids[move+ahead]')} against {stack_ms('installed', 'move_ids[move+ahead]')}, and "
+        f"{stack_ms('noinit', 'move_ids[move+ahead] lanes')} against "
+        f"{stack_ms('installed', 'move_ids[move+ahead] lanes')} cooperatively. Where "
         f"Warp's device still waits (a traced run of {seconds(waits15['wall_s'])}: busy "
         f"{seconds(waits15['device_busy_s'])}, idle {seconds(waits15['device_idle_s'])}): "
         + ", ".join(f"{step} {seconds(value)}" for step, value in list(waits15["idle_by_host_step_s"].items())[:6])
@@ -627,6 +643,7 @@ def scale_h100() -> list[str]:
                     "armadillo_100k_h200_issue48_step15_turn2_base.json",
                     "armadillo_100k_h200_issue48_step15_turn1_now.json",
                     "armadillo_100k_h200_issue48_step15_turn2_now.json",
+                    "stack_h200_warp_installed_issue48_step15.json", "stack_h200_warp_noinit_issue48_step15.json",
                     "armadillo_100k_h200_issue48_step15b_turn1_base.json",
                     "armadillo_100k_h200_issue48_step15b_turn2_base.json",
                     "armadillo_100k_h200_issue48_step15b_turn1_now.json",
