@@ -319,8 +319,14 @@ def against(result: dict, profile: dict) -> dict:
     stages, the host's time over the synchronisations (the first model's, which did not hold)."""
     gpu = next(iter(profile.values()))
     counted = result["launches"]["kernels"]
+    # A move launch's kind, cooperative or not (profile_kernels marks the former " lanes"): the CPU counts
+    # them by kind alone.
+    by_kind = collections.defaultdict(lambda: [0, 0.0])
+    for name, entry in gpu["kernels"].items():
+        by_kind[name.removesuffix(" lanes")][0] += entry[0]
+        by_kind[name.removesuffix(" lanes")][1] += entry[1]
     rows = [dict(kernel=name, cpu_launches=counted.get(name, {}).get("launches", 0), gpu_launches=entry[0],
-                 gpu_seconds=entry[1]) for name, entry in sorted(gpu["kernels"].items(), key=lambda item: -item[1][1])]
+                 gpu_seconds=entry[1]) for name, entry in sorted(by_kind.items(), key=lambda item: -item[1][1])]
     moves = sum(entry[1] for name, entry in gpu["kernels"].items() if name.startswith("move_ids"))
     others = sum(entry[1] for name, entry in gpu["kernels"].items() if not name.startswith("move_ids"))
     other_launches = sum(entry[0] for name, entry in gpu["kernels"].items() if not name.startswith("move_ids"))
