@@ -293,6 +293,10 @@ SOURCES = {
         "2 cores", "ebce931", "python bench/work_model.py --mesh armadillo.obj --count 100000 --parts walks"),
     "ahead_fraction_2core.json": Source(
         "2 cores", "1e767cb", "python bench/ahead_tail.py --starts 3e-4 --fractions 0.64 0.512 0.4 --large-seeds 3"),
+    "work_model_2core_armadillo_100k_issue48_step14.json": Source(
+        "2 cores", "d75f664", "python bench/work_model.py --mesh armadillo.obj --count 100000 --against "
+        "bench/results/stack_h200_warp_installed_issue48_step15.json --constants "
+        "bench/results/work_model_2core_armadillo_100k_issue48_step7.json"),
     "work_model_2core_armadillo_100k_issue48_step7.json": Source(
         "2 cores", "1e767cb", "python bench/work_model.py --mesh armadillo.obj --count 100000 --against "
         "bench/results/profile_kernels_h100_armadillo_issue48_step7.json --constants "
@@ -675,9 +679,15 @@ def scale_h100() -> list[str]:
 
     names = ["set-up", "move launches", "other launches", "host, in the rounds", "final check", "whole call"]
     arm7_profiled = load("profile_kernels_h100_armadillo_issue48_step7.json")["warp"]
-    guess7 = [model7["prediction"][key] for key in ("setup", "moves", "other_launches", "host", "verify", "seconds")]
-    split = [[name, seconds(old), seconds(new7), seconds(model7_)]
-             for name, old, new7, model7_ in zip(names, parts(before), parts(arm7_profiled), guess7)]
+    stages = ("setup", "moves", "other_launches", "host", "verify", "seconds")
+    guess7 = [model7["prediction"][key] for key in stages]
+    # The fourteenth step: a profiled H200 run of cf4f8d3's code, and the work model's prediction of it.
+    model14 = load("work_model_2core_armadillo_100k_issue48_step14.json")
+    arm14_profiled = load("stack_h200_warp_installed_issue48_step15.json")["warp"]
+    guess14 = [model14["prediction"][key] for key in stages]
+    split = [[name, seconds(old), seconds(new7), seconds(model7_), seconds(new14), seconds(model14_)]
+             for name, old, new7, model7_, new14, model14_ in zip(names, parts(before), parts(arm7_profiled), guess7,
+                                                                 parts(arm14_profiled), guess14)]
     rows = [
         ["armadillo (100k triangles)", "100,000", seconds(arm5["median"]), seconds(arm5_cuda["median"]),
          seconds(arm5_cpu["median"]), f"{arm5['fill']:.4f}", "medians of 3, cf4f8d3 (H200)"],
@@ -716,19 +726,24 @@ def scale_h100() -> list[str]:
         f"{seconds(cube_1m['median'])} and {seconds(square_1m['median'])}, in numba's run; goals: 5x; 1 s, 8 s, 5 s). "
         f"A GPU's fast mode fills at 10,000 spheres this fraction of the faithful mode's: {policy}.",
         "",
-        "The armadillo at 100,000 by stage (each ends with a device sync) before issue 48 and at its seventh step "
-        "(the steps between: the history), and the work "
+        "The armadillo at 100,000 by stage (each ends with a device sync) before issue 48, at its seventh step and at "
+        "its fourteenth (the steps between: the history), and the work "
         "model's predictions from an earlier run's constants and the work counted on 2 cores "
-        f"(`bench/work_model.py`; same launches: {'yes' if gpu['same_launches'] else 'no'}):",
+        f"(`bench/work_model.py`; same launches: {'yes' if gpu['same_launches'] else 'no'}, "
+        f"{'yes' if model14['against']['same_launches'] else 'no'}):",
         "",
-        *table(["stage", "H100, before (e08d8b4)", "H100, the host's work (1e767cb)", "predicted (d7c0654's)"], split),
+        *table(["stage", "H100, before (e08d8b4)", "H100, the host's work (1e767cb)", "predicted (d7c0654's)",
+                "H200, fourteenth step (cf4f8d3)", "predicted (1e767cb's)"], split),
         f"A move launch lasts as long as its slowest thread's chain ({1e6 * gpu['seconds_per_critical_node']:.2f} us a "
-        f"node); the host's round takes {gpu['host_over_cpu']:.1f}x its 2-core time. The final check finds overlaps in "
+        f"node on the H100, {1e6 * model14['against']['seconds_per_critical_node']:.2f} us on the H200); the host's "
+        f"round takes {gpu['host_over_cpu']:.1f}x and {model14['against']['host_over_cpu']:.2f}x its 2-core time. "
+        "The final check finds overlaps in "
         "a grid's sorted rows (Numba), not k-d trees. Cells split finer (ratio 2.5, not 4) filled 0.5% more in 34 "
         "rounds, but took 2.72 s, not 2.07 s ([output](../bench/results/split_ratio_h100_issue48.txt)).",
         step14,
         *sources(*step14_files, *[f"{case}_1m_h100_backends_issue48_step11_now.json" for case in ("cube", "square")],
-                 *step7_files, "round_time_h100_cube_issue20_step7.json",
+                 *step7_files, "work_model_2core_armadillo_100k_issue48_step14.json",
+                 "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
                  "policy_fill_2core_10k.json"),
     ]
