@@ -604,13 +604,16 @@ def scale_h100() -> list[str]:
     stack = {version: load(f"stack_h200_warp_{version}_issue48_step15.json")["warp"]["kernels"]
              for version in ("installed", "noinit")}
 
-    def stack_ms(version, kind):
-        calls, total = stack[version][kind][:2]
+    def per_launch(kernels, kind):
+        """A profiled run's mean device time a launch of ``kind``."""
+        calls, total = kernels[kind][:2]
         return f"{1e3 * total / calls:.1f} ms"
 
     def move_ms(backend, kind):
-        calls, total = blocks[backend][kind][:2]
-        return f"{1e3 * total / calls:.1f} ms"
+        return per_launch(blocks[backend], kind)
+
+    def stack_ms(version, kind):
+        return per_launch(stack[version], kind)
 
     step14 = (
         "**Host work off the GPU's path** (fourteenth step, H200 leases, `bash bench/gpu_issue48_step15.sh`): "

@@ -353,7 +353,7 @@ class _CudaDevice:
 
     def upload(self, host, kind):
         host = np.ascontiguousarray(host, dtype=self.DTYPES[kind])
-        if self._device_to_host is None or host.ndim == 0:  # the simulator; a scalar
+        if host.ndim == 0:
             return self.cuda.to_device(host, stream=self.stream)
         array = self.cuda.device_array(host.shape, dtype=host.dtype, stream=self.stream)
         _copy_rows(array, 0, host, len(host), self.stream)
@@ -372,18 +372,11 @@ class _CudaDevice:
 
     def grow(self, array, rows, kind):
         longer = self.empty(rows, kind)
-        if len(array) and self._device_to_host is None:
-            longer[: len(array)].copy_to_device(array, stream=self.stream)
-        elif len(array):
-            _copy_rows(longer, 0, array, len(array), self.stream)
+        _copy_rows(longer, 0, array, len(array), self.stream)
         return longer
 
     def write(self, array, start, host, kind):
-        host = np.ascontiguousarray(host, dtype=self.DTYPES[kind])
-        if len(host) and self._device_to_host is None:
-            array[start : start + len(host)].copy_to_device(host, stream=self.stream)
-        elif len(host):
-            _copy_rows(array, start, host, len(host), self.stream)
+        _copy_rows(array, start, np.ascontiguousarray(host, dtype=self.DTYPES[kind]), len(host), self.stream)
 
     def fetch(self, *pairs):
         staged = []
@@ -432,27 +425,13 @@ class _CudaDevice:
 
 
 def _write_rows(centers, radii, start, host_centers, host_radii):
-    if _simulated():
-        centers[start : start + len(host_radii)].copy_to_device(host_centers)
-        radii[start : start + len(host_radii)].copy_to_device(host_radii)
-    else:
-        _copy_rows(centers, start, host_centers, len(host_radii))
-        _copy_rows(radii, start, host_radii, len(host_radii))
+    _copy_rows(centers, start, host_centers, len(host_radii))
+    _copy_rows(radii, start, host_radii, len(host_radii))
 
 
 def _keep_rows(new_centers, new_radii, old_centers, old_radii, count):
-    if _simulated():
-        new_centers[:count].copy_to_device(old_centers[:count])
-        new_radii[:count].copy_to_device(old_radii[:count])
-    else:
-        _copy_rows(new_centers, 0, old_centers, count)
-        _copy_rows(new_radii, 0, old_radii, count)
-
-
-def _simulated() -> bool:
-    import numba
-
-    return bool(numba.config.ENABLE_CUDASIM)
+    _copy_rows(new_centers, 0, old_centers, count)
+    _copy_rows(new_radii, 0, old_radii, count)
 
 
 def _copy_rows(target, start, source, count, stream=0):
@@ -461,10 +440,17 @@ def _copy_rows(target, start, source, count, stream=0):
     a slice (a view and its checks) cost 94 us each in a profiled packing of the armadillo at 100,000,
     1,564 of them (``bench/results/launches_h100_numba_cuda_issue48_step13.txt``). Asynchronous on
     ``stream``; else the driver's synchronous copy, as numba-cuda's without a stream. ``target`` (n, ...)
-    and ``source`` C-contiguous of one dtype and row (a host ``source`` is made so)."""
+    and ``source`` C-contiguous of one dtype and row (a host ``source`` is made so). In the simulator,
+    whose arrays have no device address, numba-cuda's copy of the slice."""
+    import numba
     from numba.cuda.cudadrv import driver
 
     if count <= 0:
+        return
+    if numba.config.ENABLE_CUDASIM:
+        if not hasattr(source, "copy_to_host"):  # a host source
+            source = np.ascontiguousarray(source, dtype=target.dtype)
+        target[start : start + count].copy_to_device(source[:count], stream=stream)
         return
     row = target.strides[0]
     address = driver.device_pointer(target) + start * row

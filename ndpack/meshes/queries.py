@@ -22,27 +22,37 @@ def signed_all(first, last, points, prm, out):
         out[i] = surface_distance(points[i], prm, 0)
 
 
+def nearest_signed(q, prm, limit, signed, near):
+    # The nearest triangle to q (in the block's frame) within limit: its distance (signed by the
+    # block's own sign method, where signed) and its id in leaf order, its nearest point written to
+    # near (3,); (limit, -1) where none is within limit.
+    scale = prm[2]
+    k = int(nearest_element(q, prm, 0, (limit / scale) ** 2))
+    if k < 0:
+        return limit, k
+    t = int(prm[8]) + 30 * k
+    unsigned = np.sqrt(triangle_query(q, prm, t, 0)) * scale
+    for j in range(3):
+        near[j] = triangle_query(q, prm, t, 2 + j) * scale + prm[3 + j]
+    inside = False
+    if signed and prm[1] == 0.0:
+        inside = triangle_query(q, prm, t, 1) < 0.0
+    elif signed:
+        inside = mesh_winding_number(q, prm, 0) > 0.5
+    return (-unsigned if inside else unsigned), k
+
+
 def closest_all(first, last, points, prm, limit, signed, out_distance, out_closest, out_triangle):
     scale = prm[2]
+    q = np.empty(3)
+    near = np.empty(3)
     for i in range(first, last):
-        q = np.empty(3)
         for j in range(3):
             q[j] = (points[i, j] - prm[3 + j]) / scale
-        k = int(nearest_element(q, prm, 0, (limit / scale) ** 2))
-        out_triangle[i] = k
-        if k < 0:
-            out_distance[i] = limit
-            continue
-        t = int(prm[8]) + 30 * k
-        unsigned = np.sqrt(triangle_query(q, prm, t, 0)) * scale
-        for j in range(3):
-            out_closest[i, j] = triangle_query(q, prm, t, 2 + j) * scale + prm[3 + j]
-        inside = False
-        if signed and prm[1] == 0.0:
-            inside = triangle_query(q, prm, t, 1) < 0.0
-        elif signed:
-            inside = mesh_winding_number(q, prm, 0) > 0.5
-        out_distance[i] = -unsigned if inside else unsigned
+        out_distance[i], out_triangle[i] = nearest_signed(q, prm, limit, signed, near)
+        if out_triangle[i] >= 0:
+            for j in range(3):
+                out_closest[i, j] = near[j]
 
 
 def step_in_all(first, last, points, lower, upper, prm, steps, margin, on_surface, vertices, faces, order,
@@ -50,36 +60,28 @@ def step_in_all(first, last, points, lower, upper, prm, steps, margin, on_surfac
     # The loop of Oracle._step_inside, point by point, with closest_all's signed distance and the
     # mesh's _distance_and_gradient: the same operations in the same order, so the same numbers.
     scale = prm[2]
+    p = np.empty(3)
+    q = np.empty(3)
+    g = np.empty(3)
+    near = np.empty(3)
+    e1 = np.empty(3)
+    e2 = np.empty(3)
     for i in range(first, last):
-        p = np.empty(3)
-        q = np.empty(3)
-        g = np.empty(3)
         for j in range(3):
             p[j] = points[i, j]
         for _ in range(steps):
             for j in range(3):
                 q[j] = (p[j] - prm[3 + j]) / scale
-            k = int(nearest_element(q, prm, 0, (1e30 / scale) ** 2))
-            if k < 0:  # no triangle: closest_all's distance 1e30 and no nearest point (unit_rows: the first axis)
-                distance = 1e30
+            distance, k = nearest_signed(q, prm, 1e30, True, near)  # closest()'s limit
+            if k < 0:  # no triangle: no nearest point (unit_rows: the first axis)
                 g[0], g[1], g[2] = 1.0, 0.0, 0.0
             else:
-                t = int(prm[8]) + 30 * k
-                unsigned = np.sqrt(triangle_query(q, prm, t, 0)) * scale
-                inside = False
-                if prm[1] == 0.0:
-                    inside = triangle_query(q, prm, t, 1) < 0.0
-                else:
-                    inside = mesh_winding_number(q, prm, 0) > 0.5
-                distance = -unsigned if inside else unsigned
                 if distance < 0.0:
                     break
                 length = abs(distance)
                 if length <= on_surface:  # no direction: the nearest triangle's normal
                     face = order[k]
                     a, b, c = faces[face, 0], faces[face, 1], faces[face, 2]
-                    e1 = np.empty(3)
-                    e2 = np.empty(3)
                     for j in range(3):
                         e1[j] = vertices[b, j] - vertices[a, j]
                         e2[j] = vertices[c, j] - vertices[a, j]
@@ -89,7 +91,7 @@ def step_in_all(first, last, points, lower, upper, prm, steps, margin, on_surfac
                 else:
                     sign = 1.0 if distance > 0.0 else 0.0
                     for j in range(3):
-                        g[j] = sign * (p[j] - (triangle_query(q, prm, t, 2 + j) * scale + prm[3 + j])) / length
+                        g[j] = sign * (p[j] - near[j]) / length
                 norm = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
                 if norm > 0.0:
                     for j in range(3):
@@ -219,7 +221,8 @@ def closest(block: np.ndarray, points: np.ndarray, limit: float = np.inf, signed
     return distance, closest_points, triangle
 
 
-#: A step in costs up to its ``steps`` queries a point: threads pay from fewer points than one query's.
+#: A step in costs up to its ``steps`` queries a point, so threads should pay from fewer points than
+#: one query's :data:`PARALLEL_FROM_MESH` (a choice, not tuned: the set-up's 1,208 points use them).
 PARALLEL_FROM_STEP_IN = 64
 
 
