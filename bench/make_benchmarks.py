@@ -284,6 +284,18 @@ SOURCES = {
                     "armadillo_1m_h200_gpus_issue48_step15b_now.json",
                     "armadillo_1m_h200_numba_issue48_step15b_now.json", "timeline_h200_warp_issue48_step15b_scale.json",
                     "verify_speed_h200_armadillo_100k_issue48_step15b.json")},
+    **{name: Source("H200", "9c75fa8", f"bash bench/gpu_issue48_step16.sh {mode}", "2026-11-28")
+       for name, mode in (("cube_1m_h200_backends_issue48_step16_base.json", "inline"),
+                          ("square_1m_h200_backends_issue48_step16_base.json", "inline"),
+                          ("cube_1m_h200_numba_issue48_step16_now.json", "million"),
+                          ("square_1m_h200_numba_issue48_step16_now.json", "million"),
+                          ("fresh_machine_h200_issue48_step16.json", "million"))},
+    **{name: Source("H200", commit, "STEP=step16b bash bench/gpu_issue48_step16.sh inline", "2026-11-28")
+       for version, commit in (("base", "9c75fa8"), ("now", "cc22473"))
+       for name in (f"armadillo_100k_h200_warp_issue48_step16b_turn1_{version}.json",
+                    f"armadillo_100k_h200_warp_issue48_step16b_turn2_{version}.json",
+                    f"cube_1m_h200_backends_issue48_step16b_{version}.json",
+                    f"square_1m_h200_backends_issue48_step16b_{version}.json")},
     **{f"fresh_machine_2core_issue48_step12_{version}.json": Source(
         "2 cores", commit, f"{'PYTHONPATH=<4d9dd08' + chr(39) + 's ndpack> ' if version == 'base' else ''}python "
         f"bench/fresh_machine.py --mesh armadillo.obj --backends numba --out "
@@ -568,9 +580,6 @@ def intro() -> list[str]:
 
 def scale_h100() -> list[str]:
     cube = load("round_time_h100_cube_issue20_step7.json")["results"]
-    # Issue 48's seventh step, its second lease (STEP=step7b final): the million rows' Warp and numba.
-    final = {name: load(f"{name}_issue48_step7b_now.json") for name in (
-        "armadillo_1m_h100", "cube_1m_h100", "cube_1m_h100host_numba", "square_1m_h100", "square_1m_h100host_numba")}
     # Issue 48's eleventh step, one H100 lease with NumPy 2.4 carried: the three backends in one process at
     # 100,000; Warp and numba-cuda at a million on the next lease.
     # Issue 48's fourteenth step: the armadillo's rows, the three backends on one H200 lease (cf4f8d3).
@@ -579,12 +588,19 @@ def scale_h100() -> list[str]:
     gpus_1m = load("armadillo_1m_h200_gpus_issue48_step15b_now.json")
     arm_1m, arm_1m_cuda = gpus_1m["warp"], gpus_1m["numba-cuda"]
     arm_1m_cpu = load("armadillo_1m_h200_numba_issue48_step15b_now.json")["numba"]
-    million11 = {case: load(f"{case}_1m_h100_backends_issue48_step11_now.json")
-                 for case in ("armadillo", "cube", "square")}
-    cube_1m, cube_1m_cpu = final["cube_1m_h100"]["warp"], final["cube_1m_h100host_numba"]["numba"]
-    square_1m, square_1m_cpu = final["square_1m_h100"]["warp"], final["square_1m_h100host_numba"]["numba"]
-    peak11 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
-                             (RESULTS / "memory_h100_issue48_step11.txt").read_text()))
+    # Issue 48's sixteenth step, one H200 lease: the cube and the square at a million, the GPUs in one process
+    # (the first turn of `inline`, main's code), numba in the next (`million`), and the peak memory.
+    million16 = {case: load(f"{case}_1m_h200_backends_issue48_step16_base.json") for case in ("cube", "square")}
+    million16_cpu = {case: load(f"{case}_1m_h200_numba_issue48_step16_now.json")["numba"]
+                     for case in ("cube", "square")}
+    peak16 = dict(re.findall(r"(\w+) at 1,000,000: peak GPU memory used \(MiB, whole device\): (\d+)",
+                             (RESULTS / "memory_h200_issue48_step16.txt").read_text()))
+    # The sixteenth step's experiment: Warp's functions inlined, in turns with main (two turns at 100,000).
+    inline = {(turn, version): load(f"armadillo_100k_h200_warp_issue48_step16b_turn{turn}_{version}.json")
+              for turn in (1, 2) for version in ("base", "now")}
+    inline_1m = {(case, version): load(f"{case}_1m_h200_backends_issue48_step16b_{version}.json")["warp"]
+                 for case in ("cube", "square") for version in ("base", "now")}
+    fresh16 = {row["backend"]: row for row in load("fresh_machine_h200_issue48_step16.json")["rows"]}
     # Issue 48's fourteenth step: host work off the GPU's path (the set-up's step in, numba-cuda's copies), in turns.
     step_in = {(turn, version): load(f"armadillo_100k_h200_issue48_step15_turn{turn}_{version}.json")
                for turn in (1, 2) for version in ("base", "now")}
@@ -642,9 +658,27 @@ def scale_h100() -> list[str]:
         + ", ".join(f"{step} {seconds(value)}" for step, value in list(waits15["idle_by_host_step_s"].items())[:6])
         + "; the final check's overlap search took "
         + ", ".join(f"{1e3 * pairs15[f'pairs_{threads}_threads_s']:.0f} ms" for threads in (1, 4, 8, 16))
-        + " on 1, 4, 8 and 16 of the host's threads (`bench/verify_speed.py`): little gains past 8. Warp's peak GPU "
-        f"memory at a million (eleventh step): the armadillo {int(peak11['armadillo']):,} MiB, the cube "
-        f"{int(peak11['cube']):,} MiB ([output](../bench/results/memory_h100_issue48_step11.txt)).")
+        + " on 1, 4, 8 and 16 of the host's threads (`bench/verify_speed.py`): little gains past 8.")
+
+    def fresh(backend):
+        row = fresh16[backend]
+        return f"{seconds(row['whole_s'])} (the first packing {seconds(row['first_packing_s'])})"
+
+    step16 = (
+        "**Sixteenth step** (one H200 lease, `bash bench/gpu_issue48_step16.sh inline` and `million`, main's code): "
+        "Warp's functions printed `@wp.func(inline=True)` (46 calls in the move module's PTX become 5) made the "
+        f"armadillo at 100,000 slower, {in_turns(inline, 'warp')} (the set-up "
+        f"{in_turns(inline, 'warp', 'setup')}), with other spheres of the same volume "
+        "([output](../bench/results/same_spheres_h200_issue48_step16b.txt)); the cube and the square at a million "
+        f"the same spheres in {seconds(inline_1m[('cube', 'now')]['median'])} and "
+        f"{seconds(inline_1m[('square', 'now')]['median'])} against {seconds(inline_1m[('cube', 'base')]['median'])} "
+        f"and {seconds(inline_1m[('square', 'base')]['median'])}: kept aside (branch `issue48-step16-warp-inline`). "
+        f"Warp's peak GPU memory at a million: the armadillo {int(peak16['armadillo']):,} MiB, the cube "
+        f"{int(peak16['cube']):,} MiB ([output](../bench/results/memory_h200_issue48_step16.txt)). A fresh machine's "
+        f"first packing of the armadillo, every cache empty (`bench/fresh_machine.py`): Warp {fresh('warp')}, "
+        f"numba-cuda {fresh('numba-cuda')}, its GPU kernels' compile "
+        f"{seconds(fresh16['warp']['compile_times']['warp'])} and "
+        f"{seconds(fresh16['numba-cuda']['compile_times']['numba-cuda'])}.")
     step14_files = ["blocks_h200_warp_issue48_step15.json", "blocks_h200_numba-cuda_issue48_step15.json",
                     "armadillo_100k_h200_issue48_step15_turn1_base.json",
                     "armadillo_100k_h200_issue48_step15_turn2_base.json",
@@ -660,8 +694,14 @@ def scale_h100() -> list[str]:
                     "armadillo_1m_h200_numba_issue48_step15b_now.json",
                     "timeline_h200_warp_issue48_step15b_scale.json",
                     "verify_speed_h200_armadillo_100k_issue48_step15b.json"]
+    step16_files = [*[f"{case}_1m_h200_backends_issue48_step16_base.json" for case in ("cube", "square")],
+                    *[f"{case}_1m_h200_numba_issue48_step16_now.json" for case in ("cube", "square")],
+                    "fresh_machine_h200_issue48_step16.json",
+                    *[f"armadillo_100k_h200_warp_issue48_step16b_turn{turn}_base.json" for turn in (1, 2)],
+                    *[f"{case}_1m_h200_backends_issue48_step16b_base.json" for case in ("cube", "square")],
+                    *[f"armadillo_100k_h200_warp_issue48_step16b_turn{turn}_now.json" for turn in (1, 2)],
+                    *[f"{case}_1m_h200_backends_issue48_step16b_now.json" for case in ("cube", "square")]]
     step7_files = ["profile_kernels_h100_armadillo_issue48_step7.json"]
-    step7_files += [f"{name}_issue48_step7b_now.json" for name in final]
     step7_files += ["work_model_2core_armadillo_100k_issue48_step7.json"]
 
     warp_10m = first(load("tiled_10M_h100_warp_alone.json")["rows"], run="alone")
@@ -672,7 +712,7 @@ def scale_h100() -> list[str]:
 
 
     def now_1m(case, backend):
-        return seconds(million11[case][backend]["median"])
+        return seconds(million16[case][backend]["median"])
 
     def parts(run):
         stages, device = run["stages"], run["device"]
@@ -698,11 +738,10 @@ def scale_h100() -> list[str]:
          f"{median_of(cube, 'fill', backend='warp'):.4f}", "medians of 2, 4ea141e"],
         ["armadillo (100k triangles)", "1,000,000", seconds(arm_1m["median"]), seconds(arm_1m_cuda["median"]),
          seconds(arm_1m_cpu["median"]), f"{arm_1m['fill']:.4f}", "medians of 2, cf4f8d3 (H200)"],
-        ["unit cube", "1,000,000", now_1m("cube", "warp"), now_1m("cube", "numba-cuda"), seconds(cube_1m_cpu["median"]),
-         f"{million11['cube']['warp']['fill']:.4f}", "medians of 2, a89e925 (numba: one run, 1e767cb)"],
-        ["unit square", "1,000,000", now_1m("square", "warp"), now_1m("square", "numba-cuda"),
-         seconds(square_1m_cpu["median"]), f"{million11['square']['warp']['fill']:.4f}",
-         "medians of 2, a89e925 (numba: one run, 1e767cb)"],
+        *[[name, "1,000,000", now_1m(case, "warp"), now_1m(case, "numba-cuda"),
+           seconds(million16_cpu[case]["median"]), f"{million16[case]['warp']['fill']:.4f}",
+           "medians of 2, a1532dd (H200; numba: one run)"] for name, case in (("unit cube", "cube"),
+                                                                            ("unit square", "square"))],
         ["unit cube", "10,000,000", seconds(warp_10m["seconds"]), "", "", f"{warp_10m['fill']:.4f}",
          "one run, e7f6fee"],
     ]
@@ -716,17 +755,18 @@ def scale_h100() -> list[str]:
         "Fast mode, seed 0: seconds of the whole `nd.pack` call, the final float64 check included, the compile apart",
         "(a warm-up packing first). numba-cuda needs NumPy 2.4, carried to the GPU machine (its image's 2.5 breaks "
         "numba-cuda's CUDA target): it was not run from 3ffe337 to 9d800f2. The armadillo's rows are of one H200 lease "
-        "(at 100,000 the three backends in one process; at a million the GPUs in one, numba in the next); the cube's "
-        "and the square's of H100 leases, numba's at a million of an earlier one, beside Warp's of then.",
+        "(at 100,000 the three backends in one process; at a million the GPUs in one, numba in the next), the cube's "
+        "and the square's at a million of another (the same way), the cube's at 100,000 and ten million of H100 "
+        "leases.",
         "",
         *table(head, rows),
         f"Warp is {arm5_cpu['median'] / arm5['median']:.2f}x the host's 16 cores on the armadillo at "
         f"100,000 (numba-cuda {arm5_cpu['median'] / arm5_cuda['median']:.2f}x) and "
         f"{arm_1m_cpu['median'] / arm_1m['median']:.1f}x at a million (numba-cuda "
         f"{arm_1m_cpu['median'] / arm_1m_cuda['median']:.1f}x), "
-        f"{cube_1m_cpu['median'] / cube_1m['median']:.1f}x on the cube and "
-        f"{square_1m_cpu['median'] / square_1m['median']:.1f}x on the square at a million (1e767cb's Warp, "
-        f"{seconds(cube_1m['median'])} and {seconds(square_1m['median'])}, in numba's run; goals: 5x; 1 s, 8 s, 5 s). "
+        + ", ".join(f"{million16_cpu[case]['median'] / million16[case]['warp']['median']:.1f}x on the {case}"
+                    for case in ("cube", "square"))
+        + " at a million (goals: 5x; 1 s, 8 s, 5 s). "
         f"A GPU's fast mode fills at 10,000 spheres this fraction of the faithful mode's: {policy}.",
         "",
         "The armadillo at 100,000 by stage (each ends with a device sync) before issue 48, at its seventh step and at "
@@ -743,8 +783,8 @@ def scale_h100() -> list[str]:
         "The final check finds overlaps in "
         "a grid's sorted rows (Numba), not k-d trees. Cells split finer (ratio 2.5, not 4) filled 0.5% more in 34 "
         "rounds, but took 2.72 s, not 2.07 s ([output](../bench/results/split_ratio_h100_issue48.txt)).",
-        step14,
-        *sources(*step14_files, *[f"{case}_1m_h100_backends_issue48_step11_now.json" for case in ("cube", "square")],
+        step14 + " " + step16,
+        *sources(*step14_files, *step16_files,
                  *step7_files, "work_model_2core_armadillo_100k_issue48_step14.json",
                  "round_time_h100_cube_issue20_step7.json",
                  "tiled_10M_h100_warp_alone.json", "profile_kernels_h100_armadillo_issue48_before.json",
@@ -789,8 +829,7 @@ def other_shapes_h100() -> list[str]:
                 runs[run["case"], backend] = run
     budget = load("scale_nd_h100_warp.json")["args"]["time_budget"]
     rows = []
-    for case, counts in (("unit square", (100_000, 1_000_000)),
-                         ("armadillo, 399,904 triangles", (10_000, 100_000, 1_000_000)),
+    for case, counts in (("unit square", (100_000,)), ("armadillo, 399,904 triangles", (10_000, 100_000, 1_000_000)),
                          ("4-D ball with a hole", (100_000,)), ("5-D ball with a hole", (100_000,))):
         warp, cuda = runs[case, "warp"], runs[case, "numba-cuda"]
         for n in counts:
@@ -806,7 +845,7 @@ def other_shapes_h100() -> list[str]:
         "",
         "Fast mode, seed 0, one run: seconds to the round that reached the count. This is the code of issue 5's "
         "fifth measurement, before issue 20's GPU work: later code was not measured on these shapes (its unit "
-        "cube is in the table above). The plots: `python bench/plot_scale.py "
+        "cube, and the unit square at a million, are in the table above). The plots: `python bench/plot_scale.py "
         "bench/results/scale_{boxes,subdivided,nd}_h100_warp.json --machine H100`.",
         "",
         *table(["shape", "spheres", "Warp", "numba-cuda", "fill (Warp)", "compile (Warp / numba-cuda)"], rows),

@@ -56,8 +56,11 @@ MODULES: dict[str, int] = {}
 #: the mesh queries, 8.1 s for the 2-D shapes, 8.3 s for the 3-D shapes and 16.0 s for 3-D shapes and
 #: meshes, and numba-cuda 18.6 s for the kernels of a mesh's first packing (their first launches;
 #: 47.2 s before meshes had their own program and the move kernel one converge:
-#: bench/results/cuda_compile_h100_issue48_step9_now.json). So the estimates are within 2x of each.
-TYPICAL_SECONDS = {"numba": 10, "numba-cuda": 20, "warp": 6, "warp on a GPU": 4}
+#: bench/results/cuda_compile_h100_issue48_step9_now.json). A fresh H200 at issue 48's sixteenth step:
+#: Warp 3.2 s for the meshes' kernels and 1.6 s for their cooperative moves, numba-cuda 10.2 s, Numba
+#: 2.9-3.5 s for the mesh queries (bench/results/fresh_machine_h200_issue48_step16.json). So the
+#: estimates are within 2x of each.
+TYPICAL_SECONDS = {"numba": 10, "numba-cuda": 15, "warp": 6, "warp on a GPU": 3}
 #: Warp's CUDA optimisation level for ndpack's modules. At Warp's default (3) a fresh H100's first
 #: packing of a mesh compiled for 90 s (most of it the driver compiling Warp's PTX) and packed the
 #: armadillo's 100,000 spheres in 2.07 s; at 2, 3 s and 2.00 s (medians of 3, the driver's cache
