@@ -30,6 +30,7 @@ from .scale.many import ManyResult, pack_many
 from .oracle import Oracle, Volume, ball_volume
 from .packing import Packing, RoundStats
 from .drivers.greedy.protosphere import Round, pack, pack_sizes
+from .drivers.dense import pack_dense
 from .geometry.rotation import rotation
 from .drivers.sizes import SizeDistribution, SizeReport
 from .scale.tiled import pack_tiled
@@ -45,6 +46,6 @@ __all__ = [
     "NdpackError", "OracleError", "Oracle",
     "Packing", "ParameterError", "RepairWarning", "Round", "RoundStats", "ShapeError", "Verification", "Volume",
     "ball_volume", "check_covering", "cover", "Covering", "CoverReport", "ManyResult", "pack", "pack_many",
-    "pack_tiled", "pack_sizes", "SizeDistribution",
+    "pack_tiled", "pack_sizes", "pack_dense", "SizeDistribution",
     "SizeReport", "rotation", "verify", *_shape_names,
 ]
