@@ -178,6 +178,43 @@ SIGN_HELP = ("a mesh file: how inside is told; auto (the default) takes pseudo-n
 SIGN_CHOICES = ("auto", "pseudonormal", "winding")
 
 
+def _sizes(text: str):
+    """``--sizes``: ``radius:R`` (equal spheres), ``lognormal:median=M,sigma=S[,by=mass]`` or
+    ``discrete:radii=R1/R2/...,shares=S1/S2/...[,by=mass]``: a radius or a SizeDistribution."""
+    from .drivers.sizes import SizeDistribution
+
+    kind, _, rest = text.partition(":")
+    usage = ("give radius:R, lognormal:median=M,sigma=S[,by=mass] or discrete:radii=R1/R2,shares=S1/S2[,by=mass], "
+             f"not {text!r}")
+    try:
+        if kind == "radius":
+            radius = float(rest)
+            if not (math.isfinite(radius) and radius > 0):
+                raise ValueError(rest)
+            return radius
+        fields = dict(part.split("=", 1) for part in rest.split(",") if part)
+        by = fields.pop("by", "count")
+        if kind == "lognormal" and set(fields) == {"median", "sigma"}:
+            return SizeDistribution.lognormal(float(fields["median"]), float(fields["sigma"]), by=by)
+        if kind == "discrete" and set(fields) == {"radii", "shares"}:
+            return SizeDistribution.discrete([float(v) for v in fields["radii"].split("/")],
+                                             [float(v) for v in fields["shares"].split("/")], by=by)
+    except (ValueError, NdpackError) as error:
+        raise argparse.ArgumentTypeError(f"{usage} ({error})") from None
+    raise argparse.ArgumentTypeError(usage)
+
+
+def _fraction(text: str) -> float:
+    """``--solid-fraction``: a share of the shape's volume, 0 < share < 1."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and 0 < value < 1):
+        raise argparse.ArgumentTypeError(f"expected a share of the volume between 0 and 1 (0.6), got {text!r}")
+    return value
+
+
 def _share(text: str) -> float:
     """``--protrusion``: a share of the diagonal, 0 < share < 1 (``1%`` is accepted too)."""
     percent = text.strip().endswith("%")
@@ -227,6 +264,15 @@ def _parser() -> argparse.ArgumentParser:
     pack.add_argument("--periodic", type=_periodic_axes, metavar="AXES",
                       help="make these axes of the shape's bounding box periodic: all, or numbers such as 0,1 "
                       "(a periodic box: box:dim=4 --periodic all)")
+    pack.add_argument("--sizes", type=_sizes, metavar="SPEC",
+                      help="radii from a size distribution (granular beds): radius:R (equal spheres), "
+                      "lognormal:median=M,sigma=S[,by=mass] or discrete:radii=R1/R2,shares=S1/S2[,by=mass]; "
+                      "-n of them, or as many as --solid-fraction asks (nd.pack_sizes; with --dense, nd.pack_dense)")
+    pack.add_argument("--solid-fraction", type=_fraction, metavar="SHARE",
+                      help="with --sizes: as many particles as fill this share of the shape's volume (instead of -n)")
+    pack.add_argument("--dense", action="store_true",
+                      help="with --sizes: a dense random bed, all particles jammed together (nd.pack_dense), "
+                      "not placed one by one in the largest gaps")
     pack.add_argument("--centers-only", action="store_true",
                       help="only the centres must lie inside (needs --max-radius): spheres may reach past the "
                       "walls by their radius, as DEM codes cut a bed by centre")
@@ -356,6 +402,8 @@ STOP_REASONS = {
     "min_radius": "no sphere of the least radius fits", "no_room": "no room left",
     "callback": "stopped by the callback",
     "interrupted": "interrupted (Ctrl-C): what was packed so far",
+    "jammed": "jammed: the densest random bed found", "fraction": "the solid fraction asked for reached",
+    "relaxations": "the search's relaxations spent: the densest bed found",
 }
 
 
@@ -390,7 +438,9 @@ def _pack(args) -> int:
     common = dict(n=args.count, min_radius=args.min_radius, grid=args.grid, iterations=args.iterations,
                   mode=args.mode, seed=args.seed, backend=args.backend, device=args.device,
                   progress=not args.quiet and sys.stderr.isatty(), on_invalid=args.on_invalid)
-    if args.tiles is not None:
+    if args.sizes is not None or args.dense or args.solid_fraction is not None:
+        packing = _pack_sized(args, shape)
+    elif args.tiles is not None:
         packing = _pack_keeping_invalid(_pack_tiled(args), args.output, shape, **common)
     else:
         packing = _pack_keeping_invalid(pack, args.output, shape, max_radius=args.max_radius, fill=args.fill,
@@ -410,6 +460,11 @@ def _pack(args) -> int:
               f"ball with a hole: annulus:dim={shape.dim}")
     print(f"fill:     {packing.fill:.4f}{_plus_minus(packing.fill_error) if packing.volume_error else ''}")
     print(f"verified: {report.summary()}")
+    if packing.params.get("mode") == "dense":
+        contacts = packing.params["contacts"]
+        print(f"contacts: {contacts['mean']:.2f} a particle ({contacts['backbone_mean']:.2f} among the "
+              f"{len(packing) - contacts['rattlers']:,} that are not rattlers), {contacts['wall']:,} on walls; "
+              f"radii {packing.params['scale']:.4g} x the sizes")
     tiled = packing.params.get("tiled")
     if tiled:
         print(f"tiles:    {' x '.join(map(str, tiled['tiles']))} on {tiled['workers']} workers; "
@@ -429,6 +484,34 @@ def _pack(args) -> int:
               file=sys.stderr)
         return 130
     return 0 if report.ok else 1
+
+
+def _pack_sized(args, shape):
+    """``--sizes`` (and ``--solid-fraction``, ``--dense``): nd.pack_sizes, or nd.pack_dense."""
+    from .drivers.dense import pack_dense
+    from .drivers.greedy.protosphere import pack_sizes
+    from .drivers.sizes import SizeDistribution
+
+    if args.sizes is None:
+        raise ParameterError("--dense and --solid-fraction need --sizes: radius:R, lognormal:median=M,sigma=S or "
+                             "discrete:radii=R1/R2,shares=S1/S2")
+    for given, name in ((args.tiles is not None, "--tiles"), (args.centers_only, "--centers-only"),
+                        (args.max_radius is not None or args.min_radius, "--min-radius and --max-radius"),
+                        (args.fill is not None, "--fill")):
+        if given:
+            raise ParameterError(f"{name} does not go with --sizes: the sizes say the radii, and -n or "
+                                 "--solid-fraction how many")
+    n = None if args.solid_fraction is not None else args.count
+    progress = not args.quiet and sys.stderr.isatty()
+    if args.dense:
+        return pack_dense(shape, args.sizes, n=n, solid_fraction=args.solid_fraction, seed=args.seed,
+                          backend=args.backend, time_budget=args.time_budget, progress=progress)
+    sizes = args.sizes
+    if not isinstance(sizes, SizeDistribution):  # equal spheres: a one-class distribution
+        sizes = SizeDistribution.discrete([sizes], [1.0])
+    return pack_sizes(shape, sizes, n=n, solid_fraction=args.solid_fraction, time_budget=args.time_budget,
+                      grid=args.grid, iterations=args.iterations, seed=args.seed, backend=args.backend,
+                      device=args.device, progress=progress, on_invalid=args.on_invalid)
 
 
 #: The suffixes of the mesh files a folder given to ``ndpack pack`` stands for (those trimesh reads).

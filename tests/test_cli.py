@@ -490,3 +490,29 @@ def test_dim_given_twice_must_agree():
     # --dim alone: the line names the shape packed, not the word typed.
     added = run("pack", "box", "--dim", "4", "-n", "3", "--grid", "4", "-q")
     assert added.returncode == 0 and "shape:    box:dim=4 -> Box(lower=[0.0, 0.0, 0.0, 0.0]" in added.stdout
+
+
+def test_a_dense_bed_and_a_size_distribution_from_the_command_line(tmp_path):
+    out = tmp_path / "bed.npz"
+    dense = run("pack", "box:dim=3", "--periodic", "all", "--sizes", "radius:0.1", "--dense", "-n", "150", "-q",
+                "-o", str(out))
+    assert dense.returncode == 0, dense.stderr
+    assert "spheres:  150 (jammed: the densest random bed found)" in dense.stdout
+    assert "contacts:" in dense.stdout and "dense mode" in dense.stdout
+    bed = nd.Packing.load(out)
+    assert len(bed) == 150 and bed.fill > 0.55 and np.ptp(bed.radii) == 0
+    sized = run("pack", "box:dim=2", "--sizes", "discrete:radii=0.04/0.02,shares=0.5/0.5,by=mass",
+                "--solid-fraction", "0.3", "-q")
+    assert sized.returncode == 0, sized.stderr
+    assert "sized mode" in sized.stdout and "verified: valid" in sized.stdout
+
+
+def test_size_options_that_do_not_fit_say_what_was_wrong():
+    for args, words in ((("--sizes", "lognormal:median=0.05"), "lognormal:median=M,sigma=S"),
+                        (("--sizes", "radius:0.1", "--solid-fraction", "2"), "share of the volume")):
+        result = run_without_packing("pack", "box:dim=3", *args)  # argparse's own usage and error lines
+        assert result.returncode == 2 and "Traceback" not in result.stderr, result.stderr
+        assert "error: argument" in result.stderr and words in result.stderr, result.stderr
+    one_line_error(run_without_packing("pack", "box:dim=3", "--dense"), "need --sizes")
+    one_line_error(run_without_packing("pack", "box:dim=3", "--sizes", "radius:0.1", "--tiles", "2"),
+                   "--tiles does not go with --sizes")
