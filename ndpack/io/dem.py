@@ -7,7 +7,13 @@ LAMMPS data file (``lammps``, ``.data``)
 
         atom-ID atom-type diameter density x y z
 
-    IDs run from 1 in the packing's order, every sphere has type 1. ``density`` is mass per
+    IDs run from 1 in the packing's order. Atom types are size classes (option ``types``): by
+    default one a class of the packing's discrete size distribution (its radii times the bed's
+    ``scale``, each sphere the class nearest its radius), else one a distinct radius where there
+    are at most ``MAX_TYPES`` of them, else 1 for all; ``types=one`` gives every sphere type 1. A
+    header comment lists each type's radius. No ``Masses`` section: atom_style sphere sets each
+    particle's mass from its density and diameter, and LAMMPS refuses per-type masses for it (the
+    ``mass`` command's documentation). ``density`` is mass per
     volume: LAMMPS sets each mass to ``density * 4/3 pi r**3``, the volume of a 3-D ball, in 2-D
     simulations too (``set density/disc`` makes them discs of mass ``density * pi r**2``). A 2-D
     packing is written with z = 0, a z box that straddles 0, and a header comment to use
@@ -23,7 +29,9 @@ LIGGGHTS data file (``liggghts``)
 Yade text file (``yade``, ``.txt``)
     What ``yade.ymport.text`` reads and ``yade.export.text`` writes: a first line
     ``#format x_y_z_r``, then ``x y z r`` a sphere. 3-D only. Yade takes no blank lines (its
-    reader fails on them), so none are written.
+    reader fails on them), so none are written. A periodic packing's cell goes in a comment line
+    that Yade skips, as the input script's lines that set it (``O.periodic = True``,
+    ``O.cell.setBox(Lx, Ly, Lz)``, with the cell's lower corner), and is read back.
 
 Numbers are written with 17 significant digits (``%.17g``), so every centre and radius reads
 back to the same float64 (a diameter ``2 r`` is exact in binary floating point).
@@ -33,7 +41,7 @@ The array functions (:func:`data_box`, :func:`write_data`, :func:`read_data`, :f
 packings, with the box from the packing's recorded bounds and periods, else its shape's bounds,
 else the spheres' extent. Loaded back, a data file whose header comment holds the input script's
 ``boundary p p p`` line (as ndpack writes it) records its box and periods again
-(``params["bounds"]``, ``params["period"]``). Yade's text format has no cell.
+(``params["bounds"]``, ``params["period"]``), as does a Yade file's cell comment.
 """
 
 from __future__ import annotations
@@ -51,6 +59,10 @@ from .registry import Format, register, require_dim
 
 #: The columns of an ``atom_style sphere`` row.
 SPHERE_COLUMNS = ("atom-ID", "atom-type", "diameter", "density", "x", "y", "z")
+
+#: Distinct radii up to which each gets an atom type of its own (more: one type for all, as a
+#: continuous distribution's spheres each differ).
+MAX_TYPES = 32
 
 #: LAMMPS reads lines up to 254 characters; ndpack's comment lines stay well inside.
 _TITLE_LIMIT = 200
@@ -143,9 +155,29 @@ def data_box(centers, radii, bounds=None, periods=None) -> tuple[np.ndarray, np.
     return box, periodic
 
 
+def size_types(radii, classes=None) -> tuple[np.ndarray, np.ndarray]:
+    """Atom types by size: each sphere's type (n,) int64, from 1, and each type's radius (k,).
+
+    With ``classes`` (k,), a discrete distribution's radii, each sphere takes the class nearest
+    its radius (in log); else each distinct radius is a type where there are at most
+    ``MAX_TYPES``, else every sphere is type 1 (its radius: the largest).
+    """
+    radii = np.asarray(radii, dtype=np.float64).reshape(-1)
+    if classes is not None:
+        classes = np.sort(np.asarray(classes, dtype=np.float64).reshape(-1))
+        if len(radii) == 0:
+            return np.zeros(0, dtype=np.int64), classes
+        nearest = np.abs(np.log(radii)[:, None] - np.log(classes)[None]).argmin(axis=1)
+        return nearest.astype(np.int64) + 1, classes
+    distinct = np.unique(radii)
+    if 0 < len(distinct) <= MAX_TYPES:
+        return np.searchsorted(distinct, radii).astype(np.int64) + 1, distinct
+    return np.ones(len(radii), dtype=np.int64), distinct[-1:] if len(distinct) else np.zeros(0)
+
+
 # ---------------------------------------------------------------------------------- LAMMPS, LIGGGHTS
 def write_data(path, centers, radii, box, periodic=(False, False, False), density=1.0, program: str = "LAMMPS",
-               notes=()) -> None:
+               notes=(), types=None, type_radii=None) -> None:
     """Write spheres as a data file for ``read_data`` with ``atom_style sphere``.
 
     Parameters
@@ -166,6 +198,10 @@ def write_data(path, centers, radii, box, periodic=(False, False, False), densit
         The title and comments; LIGGGHTS also gets a bare ``Atoms`` section line.
     notes : sequence of str
         More header comment lines (where the box came from, say).
+    types : (n,) int, optional
+        Each sphere's atom type, from 1 (:func:`size_types`); default 1 for all.
+    type_radii : (k,) float64, optional
+        Each type's radius, for the header comment that says which is which.
     """
     centers = np.asarray(centers, dtype=np.float64)
     radii = np.asarray(radii, dtype=np.float64).reshape(-1)
@@ -180,17 +216,27 @@ def write_data(path, centers, radii, box, periodic=(False, False, False), densit
         raise NdpackError(f"the box must be [[xlo, ylo, zlo], [xhi, yhi, zhi]] with lo < hi, got {box.tolist()}")
     periodic = np.asarray(periodic, dtype=bool).reshape(3)
     count = len(radii)
+    types = np.ones(count, dtype=np.int64) if types is None else np.asarray(types, dtype=np.int64).reshape(-1)
+    if len(types) != count or (count and types.min() < 1):
+        raise NdpackError(f"types must be {count} atom types from 1, got {len(types)} of them")
+    type_count = int(types.max()) if count else 1
     style = "granular (or sphere)" if program == "LIGGGHTS" else "sphere"
     title = f"{program} data file for atom_style {style}, written by ndpack: {count} spheres in {dim}-D"
     lines = [title]
-    lines.append("# columns: " + " ".join(SPHERE_COLUMNS) + "; every sphere has type 1")
+    if type_count == 1:
+        lines.append("# columns: " + " ".join(SPHERE_COLUMNS) + "; every sphere has type 1")
+    else:
+        lines.append("# columns: " + " ".join(SPHERE_COLUMNS) + f"; {type_count} atom types, by size")
+        if type_radii is not None and len(type_radii) == type_count:
+            described = ", ".join(f"{k + 1} r={radius:.6g}" for k, radius in enumerate(type_radii))
+            lines.append(("# atom types by radius: " + described)[:_TITLE_LIMIT])
     lines.append("# " + _density_note(program, dim, rho))
     if dim == 2:
         lines.append("# dimension 2: a 2-D packing in x and y, z = 0; put `dimension 2` in the input script")
     lines.append("# " + _boundary_note(program, dim, periodic))
     # One line each, within the line length LAMMPS reads (older versions split a longer line in two).
     lines.extend(("# " + " ".join(str(note).split()))[:_TITLE_LIMIT] for note in notes)
-    lines += ["", f"{count} atoms", "1 atom types", ""]
+    lines += ["", f"{count} atoms", f"{type_count} atom types", ""]
     lines += [f"{box[0, axis]:.17g} {box[1, axis]:.17g} {_AXES[axis]}lo {_AXES[axis]}hi" for axis in range(3)]
     text = "\n".join(lines) + "\n"
     with open(path, "w") as file:
@@ -201,7 +247,7 @@ def write_data(path, centers, radii, box, periodic=(False, False, False), densit
             file.write("\nAtoms\n\n" if program == "LIGGGHTS" else "\nAtoms # sphere\n\n")
             table = np.zeros((count, 7))
             table[:, 0] = np.arange(1, count + 1)
-            table[:, 1] = 1
+            table[:, 1] = types
             table[:, 2] = 2 * radii
             table[:, 3] = rho
             table[:, 4 : 4 + dim] = centers
@@ -230,7 +276,7 @@ def read_data(path) -> tuple[np.ndarray, np.ndarray, dict]:
     radii : (n,) float64
     info : dict
         ``box`` ``(2, 3)`` float64 (LAMMPS's defaults -0.5 and 0.5 where a line is missing),
-        ``density`` ``(n,)`` float64 and ``ids`` ``(n,)`` int64, in the same order as the spheres,
+        ``density`` ``(n,)`` float64, ``ids`` and ``types`` ``(n,)`` int64, in the same order as the spheres,
         and ``periodic`` ``(3,)`` bool: the axes that a header comment ``boundary p p p`` (the
         input script's line, which ndpack writes there) calls periodic; none without one.
 
@@ -299,9 +345,10 @@ def read_data(path) -> tuple[np.ndarray, np.ndarray, dict]:
     _check_style(style, rows)
     table = np.empty((len(rows), 5))
     ids = np.empty(len(rows), dtype=np.int64)
+    types = np.empty(len(rows), dtype=np.int64)
     for i, (number, words) in enumerate(rows):
         try:
-            ids[i] = int(words[0])
+            ids[i], types[i] = int(words[0]), int(words[1])
             table[i] = [float(word) for word in words[2:7]]
         except (ValueError, OverflowError):
             raise ValueError(f"its line {number} is not an atom_style sphere row ({' '.join(SPHERE_COLUMNS)}): "
@@ -310,7 +357,7 @@ def read_data(path) -> tuple[np.ndarray, np.ndarray, dict]:
     if len(ids) and (np.diff(ids[order]) == 0).any() and ids.any():
         twice = int(ids[order][1:][np.diff(ids[order]) == 0][0])
         raise ValueError(f"its atom ID {twice} is used twice")
-    ids, table = ids[order], table[order]
+    ids, table, types = ids[order], table[order], types[order]
     centers = table[:, 2:5]
     if any(_DIMENSION_2.search(text) for text in comments) and not centers[:, 2].any():
         centers = centers[:, :2]
@@ -320,21 +367,26 @@ def read_data(path) -> tuple[np.ndarray, np.ndarray, dict]:
         styles = _BOUNDARY.search(text)
         if styles:
             periodic = np.array([style == "p" for style in styles.groups()])
-    return centers, table[:, 0] / 2, {"box": box, "density": table[:, 1].copy(), "ids": ids, "periodic": periodic}
+    return centers, table[:, 0] / 2, {"box": box, "density": table[:, 1].copy(), "ids": ids, "types": types,
+                                      "periodic": periodic}
 
 
 # ---------------------------------------------------------------------------------- Yade
-def write_yade(path, centers, radii) -> None:
+def write_yade(path, centers, radii, cell=None) -> None:
     """Write 3-D spheres as Yade's text format, read by ``yade.ymport.text(path)``.
 
-    The first line is ``#format x_y_z_r``; then a comment line, then ``x y z r`` a sphere with
-    17 significant digits.
+    The first line is ``#format x_y_z_r``; then a comment line (and the cell's, for a periodic
+    cell), then ``x y z r`` a sphere with 17 significant digits.
 
     Parameters
     ----------
     path : str or Path
     centers : (n, 3) float64
     radii : (n,) float64
+    cell : (2, 3) array_like, optional
+        A periodic cell's lower and upper corners: written as a comment with the lines of a Yade
+        script that set it, ``O.periodic = True; O.cell.setBox(Lx, Ly, Lz)`` (Yade's cell starts
+        at the origin: shift by the lower corner, also written, where it is not 0).
     """
     centers = np.asarray(centers, dtype=np.float64)
     radii = np.asarray(radii, dtype=np.float64).reshape(-1)
@@ -342,10 +394,36 @@ def write_yade(path, centers, radii) -> None:
     if dim != 3:
         raise DimensionError(f"Yade's text format (x y z r) holds 3-D spheres, not a {dim}-D packing")
     header = f"#format x_y_z_r\n# ndpack: {len(radii)} spheres, one a line: x y z radius\n"
+    if cell is not None:
+        lower, upper = np.asarray(cell, dtype=np.float64).reshape(2, 3)
+        sizes = ", ".join(f"{length:.17g}" for length in upper - lower)
+        corner = " ".join(f"{value:.17g}" for value in lower)
+        header += f"# periodic cell: O.periodic = True; O.cell.setBox({sizes}); lower corner {corner}\n"
     with open(path, "w") as file:
         file.write(header)
         if len(radii):
             np.savetxt(file, np.column_stack([centers, radii]), fmt="%.17g")
+
+
+#: The cell comment :func:`write_yade` writes.
+_YADE_CELL = re.compile(r"^#\s*periodic cell: O\.periodic = True; O\.cell\.setBox\(([^)]*)\); lower corner (.*)$")
+
+
+def yade_cell(path) -> np.ndarray | None:
+    """The periodic cell (2, 3) of a Yade text file that :func:`write_yade` gave one, else None."""
+    for line in Path(path).read_text().splitlines():
+        if not line.startswith("#"):
+            break
+        found = _YADE_CELL.match(line.strip())
+        if found:
+            try:
+                sizes = [float(value) for value in found.group(1).split(",")]
+                lower = [float(value) for value in found.group(2).split()]
+            except ValueError:
+                return None
+            if len(sizes) == 3 and len(lower) == 3 and all(math.isfinite(v) and v > 0 for v in sizes):
+                return np.array([lower, np.add(lower, sizes)])
+    return None
 
 
 def read_yade(path) -> tuple[np.ndarray, np.ndarray]:
@@ -469,21 +547,37 @@ def _dem_box(packing: Packing) -> tuple[np.ndarray, np.ndarray, str]:
     return box, periodic, f"box: {where}"
 
 
-def _write_packing_data(packing: Packing, path: Path, program: str, density) -> None:
+def _packing_types(packing: Packing, types: str) -> tuple[np.ndarray, np.ndarray]:
+    """The atom types of ``types`` ("classes" or "one"; :func:`size_types`) for a packing: the
+    classes of a discrete distribution it records (times its ``scale``), else its distinct radii."""
+    if types not in ("classes", "one"):
+        raise NdpackError(f"types must be 'classes' (an atom type a size class) or 'one' (type 1 for all), "
+                          f"got {types!r}")
+    if types == "one":
+        return np.ones(len(packing.radii), dtype=np.int64), packing.radii[:1]
+    distribution = packing.params.get("distribution")
+    classes = None
+    if isinstance(distribution, dict) and distribution.get("kind") == "discrete":
+        classes = np.asarray(distribution["radii"], dtype=np.float64) * float(packing.params.get("scale") or 1.0)
+    return size_types(packing.radii, classes)
+
+
+def _write_packing_data(packing: Packing, path: Path, program: str, density, types) -> None:
     require_dim(packing.dim, range(2, 4), f"a {program} data file")
     density = density_value(density)
     box, periodic, note = _dem_box(packing)
-    write_data(path, packing.centers, packing.radii, box, periodic, density, program, [note])
+    kinds, radii = _packing_types(packing, types)
+    write_data(path, packing.centers, packing.radii, box, periodic, density, program, [note], kinds, radii)
 
 
-def _write_lammps(packing: Packing, path: Path, density=1.0) -> None:
+def _write_lammps(packing: Packing, path: Path, density=1.0, types="classes") -> None:
     """A LAMMPS data file for ``atom_style sphere`` (see :func:`write_data`)."""
-    _write_packing_data(packing, path, "LAMMPS", density)
+    _write_packing_data(packing, path, "LAMMPS", density, types)
 
 
-def _write_liggghts(packing: Packing, path: Path, density=1.0) -> None:
+def _write_liggghts(packing: Packing, path: Path, density=1.0, types="classes") -> None:
     """The same rows for LIGGGHTS's ``read_data`` (see :func:`write_data`)."""
-    _write_packing_data(packing, path, "LIGGGHTS", density)
+    _write_packing_data(packing, path, "LIGGGHTS", density, types)
 
 
 def _read_lammps(path: Path) -> Packing:
@@ -503,18 +597,26 @@ def _read_lammps(path: Path) -> Packing:
 
 def _write_packing_yade(packing: Packing, path: Path) -> None:
     require_dim(packing.dim, range(3, 4), "Yade's text format (.txt)")
-    write_yade(path, packing.centers, packing.radii)
+    cell = None
+    periods = packing.params.get("period")
+    if periods is not None and all(period is not None for period in periods):  # Yade's cell wraps every axis
+        box, _, _ = _dem_box(packing)
+        cell = box
+    write_yade(path, packing.centers, packing.radii, cell)
 
 
 def _read_packing_yade(path: Path) -> Packing:
     centers, radii = read_yade(path)
-    return packing_from(None, centers, radii)
+    cell = yade_cell(path)
+    params = {} if cell is None else {"bounds": cell.tolist(), "period": (cell[1] - cell[0]).tolist()}
+    return packing_from({"dim": 3, "params": params} if params else None, centers, radii)
 
 
 # Named with format=, lammps and liggghts take any file name (LAMMPS users often write data.bed).
-register(Format("lammps", (".data",), "2-3", "spheres, density, box (LAMMPS read_data, atom_style sphere)",
-                {"density": "1.0"}, _write_lammps, _read_lammps, any_name=True), default_for=(".data",))
-register(Format("liggghts", (".data",), "2-3", "the lammps rows, for LIGGGHTS read_data", {"density": "1.0"},
-                _write_liggghts, _read_lammps, any_name=True))
+register(Format("lammps", (".data",), "2-3", "spheres, density, box, a type a size class (LAMMPS read_data, "
+                "atom_style sphere)", {"density": "1.0", "types": "classes"}, _write_lammps, _read_lammps,
+                any_name=True), default_for=(".data",))
+register(Format("liggghts", (".data",), "2-3", "the lammps rows, for LIGGGHTS read_data",
+                {"density": "1.0", "types": "classes"}, _write_liggghts, _read_lammps, any_name=True))
 register(Format("yade", (".txt",), "3", "spheres, as x y z r lines (Yade ymport.text)", {}, _write_packing_yade,
                 _read_packing_yade), default_for=(".txt",))

@@ -327,3 +327,28 @@ def test_cli_packs_to_a_lammps_file_and_reads_it(tmp_path):
     result = run("info", str(out))
     assert result.returncode == 0, result.stderr
     assert "spheres:    30 in 3-D" in result.stdout
+
+
+def test_atom_types_are_size_classes_and_a_yade_cell_reads_back(tmp_path):
+    cell = nd.Periodic(nd.Box(np.zeros(3), np.ones(3)))
+    classes = nd.SizeDistribution.discrete([0.06, 0.1], [0.5, 0.5], by="mass")
+    bed = nd.pack_dense(cell, classes, n=60, progress=False)
+    bed.save(tmp_path / "bed.data")
+    centers, radii, info = ndio.dem.read_data(tmp_path / "bed.data")
+    text = (tmp_path / "bed.data").read_text()
+    assert "2 atom types" in text and "# atom types by radius: 1 r=" in text
+    small = radii < radii.max() * 0.8
+    assert set(info["types"][small]) == {1} and set(info["types"][~small]) == {2}
+    bed.save(tmp_path / "one.data", types="one")
+    assert "1 atom types" in (tmp_path / "one.data").read_text()
+    with pytest.raises(nd.NdpackError, match="types must be"):
+        bed.save(tmp_path / "bad.data", types="sizes")
+    # Equal spheres: one type; a few distinct radii: one type each.
+    kinds, type_radii = ndio.dem.size_types([0.1, 0.2, 0.1, 0.3])
+    assert kinds.tolist() == [1, 2, 1, 3] and type_radii.tolist() == [0.1, 0.2, 0.3]
+    assert ndio.dem.size_types(np.linspace(0.1, 0.2, 100))[0].max() == 1
+    bed.save(tmp_path / "bed.txt")
+    again = nd.Packing.load(tmp_path / "bed.txt")
+    assert again.params["bounds"] == [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]
+    assert again.params["period"] == [1.0, 1.0, 1.0]
+    assert (again.radii == bed.radii).all() and again.verify(cell)
