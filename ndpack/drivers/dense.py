@@ -25,7 +25,8 @@ from tqdm.auto import tqdm
 
 from ..errors import InvalidPackingError, ParameterError, ShapeError
 from ..geometry.period import period_of
-from ..geometry.soft_contacts import contact_forces, fire_move, largest_move, neighbour_lists, periods
+from ..geometry.soft_contacts import (contact_forces, fire_move, largest_move, neighbour_lists, pair_rows,
+                                      periods)
 from ..oracle import ball_volume, check_compatible
 from ..packing import Packing, RoundStats
 from ..reproducible import root
@@ -49,8 +50,9 @@ FREE = 1e-8
 #: this share of the energy (a bed that still relaxes keeps them of one order) ...
 BALANCED = 1e-10
 #: ... or, near jamming, where relaxing slows down without end, when it is not free after this
-#: many FIRE steps.
-MAX_STEPS = 2000
+#: many FIRE steps. Against 2,000 (2 cores, seed 0): equal spheres in a periodic cube at 30,000
+#: filled 0.6392 against 0.6407 in 22.9 s against 43.5 s, in 4-D at 10,000 0.4535 against 0.4553.
+MAX_STEPS = 1000
 #: Neighbour lists reach this share of the mean diameter beyond contact, and are rebuilt when a
 #: sphere has moved half of it.
 SKIN = 0.25
@@ -178,7 +180,7 @@ class Bed:
         reach = 2.0 * scale * float(self.sizes.max()) * (1.0 + 1e-6)
         starts, neighbours = neighbour_lists(self.centers, reach, self.period)
         if len(neighbours):
-            rows = np.repeat(np.arange(len(self.sizes)), np.diff(starts))
+            rows = pair_rows(starts)
             if self.period is None:
                 delta = self.centers[rows] - self.centers[neighbours]
             else:
@@ -246,13 +248,14 @@ def contacts(centers, radii, shape, period=None, gap: float = CONTACT_GAP) -> di
     gap of at most ``gap`` of the pair's reach (a wall: of the radius)."""
     count, dim = centers.shape
     starts, neighbours = neighbour_lists(centers, 2.0 * float(radii.max()) * (1.0 + gap), period)
-    rows = np.repeat(np.arange(count), np.diff(starts))
+    rows = pair_rows(starts)
     delta = centers[rows] - centers[neighbours]
     if period is not None:
         delta = period.difference(centers[rows], centers[neighbours])
     reach = radii[rows] + radii[neighbours]
     touching = np.sqrt(np.einsum("ij,ij->i", delta, delta)) <= reach * (1.0 + gap)
-    per_particle = np.bincount(rows[touching], minlength=count)
+    per_particle = (np.bincount(rows[touching], minlength=count)
+                    + np.bincount(neighbours[touching], minlength=count))
     walls = -shape._distance(centers) <= radii * (1.0 + gap)
     per_particle = per_particle + walls
     rattlers = per_particle < dim + 1

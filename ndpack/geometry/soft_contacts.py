@@ -6,9 +6,9 @@ each other apart with a force of ``delta`` along the line of centres (a harmonic
 stiffness: the energy ``delta**2 / 2`` a pair). A periodic axis takes the nearest image.
 
 The neighbour list is SciPy's k-d tree (``query_pairs``, periodic through ``boxsize``), in a
-compressed row form (each sphere's neighbours in a run, both ways), so that the forces are a
-loop over spheres, each summing its own run in a fixed order: the NumPy reference and the Numba
-kernel give the same numbers. The forces run in NumPy or compiled by Numba.
+compressed row form: each pair once, under its lower-numbered sphere, in a fixed order, so the
+forces come out the same on every machine. The forces run in NumPy (the reference) or compiled
+by Numba; the two agree to rounding (their sums run in other orders).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ def neighbour_lists(centers: np.ndarray, reach: float, period=None) -> tuple[np.
     ``period``'s axes, a :class:`~ndpack.geometry.period.Period`, or None).
 
     Returns ``starts`` (n + 1,) int64 and ``neighbours`` (m,) int64: sphere ``i``'s neighbours
-    are ``neighbours[starts[i]:starts[i + 1]]``, ascending; each pair is listed both ways.
+    numbered above ``i`` are ``neighbours[starts[i]:starts[i + 1]]``, ascending; each pair once.
     """
     from scipy.sparse import coo_matrix
     from scipy.spatial import cKDTree
@@ -33,9 +33,8 @@ def neighbour_lists(centers: np.ndarray, reach: float, period=None) -> tuple[np.
         tree = cKDTree(centers)
     else:
         tree, _ = period.tree(centers, reach)
-    pairs = tree.query_pairs(reach, output_type="ndarray")
-    rows = np.concatenate([pairs[:, 0], pairs[:, 1]])
-    cols = np.concatenate([pairs[:, 1], pairs[:, 0]])
+    pairs = tree.query_pairs(reach, output_type="ndarray")  # i < j in each
+    rows, cols = pairs[:, 0], pairs[:, 1]
     # By sphere, then neighbour (the same lists however the tree found them): SciPy's compressed
     # rows, 4x faster than NumPy's lexsort at 100,000 spheres.
     table = coo_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(count, count)).tocsr()
@@ -67,7 +66,7 @@ def contact_forces(centers, radii, starts, neighbours, lengths, compiled: bool =
     forces : (n, d) float64
         The sum of ``delta * (c_i - c_j) / |c_i - c_j|`` over the overlapping neighbours ``j``.
     energy : (n,) float64
-        Half of the sphere's pairs' energy ``delta**2 / 2`` (the other half is the neighbour's).
+        The energy ``delta**2 / 2`` of the sphere's pairs with higher-numbered neighbours.
     overlap : (n,) float64
         The largest ``delta / (r_i + r_j)`` of its pairs, 0 where none overlaps.
     """
@@ -79,24 +78,31 @@ def contact_forces(centers, radii, starts, neighbours, lengths, compiled: bool =
     if compiled:
         _kernels()(centers, radii, starts, neighbours, lengths, forces, energy, overlap)
         return forces, energy, overlap
-    rows = np.repeat(np.arange(count), np.diff(starts))
-    delta = centers[rows] - centers[neighbours]
+    rows, cols = pair_rows(starts), neighbours
+    delta = centers[rows] - centers[cols]
     wraps = np.isfinite(lengths)
     delta[:, wraps] -= lengths[wraps] * np.floor(delta[:, wraps] * (1.0 / lengths[wraps]) + 0.5)
     distance = np.sqrt((delta * delta).sum(axis=1))
-    reach = radii[rows] + radii[neighbours]
+    reach = radii[rows] + radii[cols]
     depth = np.maximum(reach - distance, 0.0)
     touching = depth > 0
-    rows, delta, distance, depth, reach = (values[touching] for values in (rows, delta, distance, depth, reach))
+    rows, cols, delta, distance, depth, reach = (values[touching] for values in
+                                                 (rows, cols, delta, distance, depth, reach))
     push = depth / np.where(distance == 0.0, 1.0, distance)
     along = push[:, None] * delta
     coincident = distance == 0.0  # two centres at one point part along the first axis
-    along[coincident, 0] = np.where(rows[coincident] < neighbours[touching][coincident], depth[coincident],
-                                    -depth[coincident])
+    along[coincident, 0] = depth[coincident]
     np.add.at(forces, rows, along)
-    np.add.at(energy, rows, 0.25 * depth * depth)
+    np.add.at(forces, cols, -along)
+    np.add.at(energy, rows, 0.5 * depth * depth)
     np.maximum.at(overlap, rows, depth / reach)
+    np.maximum.at(overlap, cols, depth / reach)
     return forces, energy, overlap
+
+
+def pair_rows(starts: np.ndarray) -> np.ndarray:
+    """The lower sphere (m,) int64 of each listed pair, from the lists' ``starts`` (n + 1,)."""
+    return np.repeat(np.arange(len(starts) - 1), np.diff(starts))
 
 
 def _forces(centers, radii, starts, neighbours, lengths, forces, energy, overlap):
@@ -106,7 +112,11 @@ def _forces(centers, radii, starts, neighbours, lengths, forces, energy, overlap
         if lengths[k] < np.inf:
             inverse[k] = 1.0 / lengths[k]
     step = np.empty(dim)
+    push_i = np.empty(dim)  # sphere i's forces, summed here and stored once
     for i in range(count):
+        for k in range(dim):
+            push_i[k] = 0.0
+        energy_i, worst_i, radius_i = 0.0, 0.0, radii[i]
         for t in range(starts[i], starts[i + 1]):
             j = neighbours[t]
             squared = 0.0
@@ -116,19 +126,27 @@ def _forces(centers, radii, starts, neighbours, lengths, forces, energy, overlap
                     offset -= lengths[k] * np.floor(offset * inverse[k] + 0.5)
                 step[k] = offset
                 squared += offset * offset
-            reach = radii[i] + radii[j]
+            reach = radius_i + radii[j]
             if squared >= reach * reach:
                 continue
             distance = np.sqrt(squared)
             depth = reach - distance
-            energy[i] += 0.25 * depth * depth
-            overlap[i] = max(overlap[i], depth / reach)
-            if distance == 0.0:
-                forces[i, 0] += depth if i < j else -depth
+            energy_i += 0.5 * depth * depth
+            share = depth / reach
+            worst_i = max(worst_i, share)
+            overlap[j] = max(overlap[j], share)
+            if distance == 0.0:  # two centres at one point part along the first axis
+                push_i[0] += depth
+                forces[j, 0] -= depth
                 continue
-            push = depth / distance
+            scale = depth / distance
             for k in range(dim):
-                forces[i, k] += push * step[k]
+                push_i[k] += scale * step[k]
+                forces[j, k] -= scale * step[k]
+        for k in range(dim):
+            forces[i, k] += push_i[k]
+        energy[i] = energy_i
+        overlap[i] = max(overlap[i], worst_i)
 
 
 def fire_move(centers, velocity, forces, dt: float, alpha: float, compiled: bool = True) -> None:
