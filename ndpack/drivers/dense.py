@@ -128,7 +128,8 @@ class Bed:
         return forces, total, worst
 
     def relax(self, scale: float) -> Relaxed:
-        """FIRE until no overlap is left (free) or the energy stops falling (jammed)."""
+        """FIRE until no overlap is left (free), or the forces balance with overlaps left or
+        ``MAX_STEPS`` pass (not free: jammed, or too near jamming to tell)."""
         velocity = np.zeros_like(self.centers)
         dt, alpha, since = FIRE_DT, FIRE_ALPHA, 0
         forces, energy, worst = self.forces(scale)
@@ -177,6 +178,8 @@ class Bed:
         if not (clearance > 0).all():
             return 0.0
         fits = [scale, float((clearance / self.sizes).min())]
+        if self.period is not None:  # no sphere as wide as a period: it would meet its own image
+            fits.append(0.5 * self.period.shortest / float(self.sizes.max()))
         reach = 2.0 * scale * float(self.sizes.max()) * (1.0 + 1e-6)
         starts, neighbours = neighbour_lists(self.centers, reach, self.period)
         if len(neighbours):
@@ -300,9 +303,9 @@ def pack_dense(
     seed : int
         The random start; the same seed gives the same bed.
     backend : {"numba", "numpy"}, optional
-        Where the contact forces run: Numba on threads (default) or the NumPy reference.
+        Where the contact forces run: Numba (default) or the NumPy reference.
     time_budget : float, optional
-        Seconds; the densest free bed found so far is returned when they are spent (as on Ctrl-C).
+        Seconds; the densest bed found so far is returned when they are spent (as on Ctrl-C).
     progress : bool, optional
         A progress bar of the solid fraction (default: when writing to a terminal).
 
@@ -398,6 +401,8 @@ def pack_dense(
         stop_reason = "interrupted"
     finally:
         bar.close()
+    if best_scale == 0.0 and stop_reason == "interrupted":
+        raise KeyboardInterrupt  # before any bed was made: nothing to keep
     if best_scale == 0.0:
         raise InvalidPackingError("the bed never relaxed to a state with every centre inside (interrupted before "
                                   "the first relaxation ended, or the shape's gradient points the wrong way)")

@@ -164,3 +164,9 @@ def test_an_interrupted_bed_keeps_the_densest_state_found(monkeypatch):
     packing = nd.pack_dense(box, 1.0, n=200, progress=False)
     assert packing.stop_reason == "interrupted" and len(packing.params["relaxations"]) == 2
     _check_bed(packing, box)
+
+
+def test_two_spheres_in_a_periodic_cell_stay_narrower_than_its_period():
+    square = nd.Periodic(nd.Box(np.zeros(2), np.ones(2)))
+    packing = nd.pack_dense(square, 1.0, n=2, progress=False)
+    assert packing.radii.max() < 0.5 and packing.verify(square)
