@@ -43,6 +43,10 @@ CASES = {
     "cylinder": ("equal spheres r = 0.05, walled cylinder 10 diameters across and high", 0.60,
                  lambda: nd.Cylinder([0.5, 0.5, 0.0], [0.5, 0.5, 1.0], 0.5), 0.05, dict(solid_fraction=0.64)),
     "cow": ("equal spheres in the cow mesh", 0.58, cow, 1.0, dict(n=3_000)),
+    "box-1k": ("equal spheres, walled unit cube, 1,222 (11 diameters across)", None,
+               lambda: nd.Box(np.zeros(3), np.ones(3)), 1.0, dict(n=1_222)),
+    "box-10k": ("equal spheres, walled unit cube, 10,000 (21 diameters across)", None,
+                lambda: nd.Box(np.zeros(3), np.ones(3)), 1.0, dict(n=10_000)),
     "lognormal": ("log-normal by mass, median 0.02, sigma 0.25, periodic unit cube", 0.65, lambda: periodic(3),
                   nd.SizeDistribution.lognormal(0.02, 0.25, by="mass"), dict(n=10_000)),
     "cube-100k": ("equal spheres, periodic unit cube", 0.635, lambda: periodic(3), 1.0, dict(n=100_000)),
@@ -66,7 +70,7 @@ def run(name):
         scaled = nd.SizeDistribution.lognormal(0.02 * scale, 0.25, by="mass")
         report = scaled.report(packing)
         row["ks_by_mass"] = report.ks
-    print(f"{name}: fill {row['fill']:.4f} (goal {goal}), {row['spheres']:,} spheres, {seconds:.1f} s, "
+    print(f"{name}: fill {row['fill']:.4f} (goal {goal or 'none'}), {row['spheres']:,} spheres, {seconds:.1f} s, "
           f"{row['relaxations']} relaxations, {row['steps']:,} steps, contacts {row['contacts']['mean']:.2f} "
           f"(backbone {row['contacts']['backbone_mean']:.2f}), valid {row['valid']}", flush=True)
     return row
