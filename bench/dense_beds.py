@@ -13,6 +13,7 @@ for a size distribution the KS distance by mass against it scaled by the bed's f
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -65,11 +66,9 @@ def run(name):
                relaxations=len(relaxations), steps=sum(r["steps"] for r in relaxations),
                scale=packing.params["scale"], stop_reason=packing.stop_reason, contacts=packing.params["contacts"],
                valid=bool(check))
-    if isinstance(sizes, nd.SizeDistribution):
-        scale = packing.params["scale"]
-        scaled = nd.SizeDistribution.lognormal(0.02 * scale, 0.25, by="mass")
-        report = scaled.report(packing)
-        row["ks_by_mass"] = report.ks
+    if isinstance(sizes, nd.SizeDistribution):  # the radii back at the distribution's scale
+        unscaled = dataclasses.replace(packing, radii=packing.radii / packing.params["scale"])
+        row["ks_by_mass"] = sizes.report(unscaled).ks
     print(f"{name}: fill {row['fill']:.4f} (goal {goal or 'none'}), {row['spheres']:,} spheres, {seconds:.1f} s, "
           f"{row['relaxations']} relaxations, {row['steps']:,} steps, contacts {row['contacts']['mean']:.2f} "
           f"(backbone {row['contacts']['backbone_mean']:.2f}), valid {row['valid']}", flush=True)

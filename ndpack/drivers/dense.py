@@ -25,8 +25,7 @@ from tqdm.auto import tqdm
 
 from ..errors import InvalidPackingError, ParameterError, ShapeError
 from ..geometry.period import period_of
-from ..geometry.soft_contacts import (contact_forces, fire_move, largest_move, neighbour_lists, pair_rows,
-                                      periods)
+from ..geometry.soft_contacts import close_pairs, contact_forces, fire_move, largest_move, neighbour_lists, periods
 from ..oracle import ball_volume, check_compatible
 from ..packing import Packing, RoundStats
 from ..reproducible import root
@@ -92,6 +91,7 @@ class Bed:
         self.mean_diameter = 2.0 * float(sizes.mean())
         self._built_at = None
         self._built_scale = -1.0
+        self.pair_overlap = np.zeros(len(sizes))  # each sphere's largest relative overlap, at the last forces
 
     def _lists(self, scale: float) -> None:
         """The neighbour lists and near-wall particles, rebuilt when a particle has moved half
@@ -114,6 +114,7 @@ class Bed:
         radii = scale * self.sizes
         forces, energy, overlap = contact_forces(self.centers, radii, self.starts, self.neighbours, self.lengths,
                                                  self.compiled)
+        self.pair_overlap = overlap
         total, worst = float(energy.sum()), float(overlap.max(initial=0.0))
         if len(self.near_wall):
             ids = self.near_wall
@@ -160,8 +161,7 @@ class Bed:
         squeezes every particle there about as much as its neighbours do)."""
         radii = scale * self.sizes
         squeeze = 1.0 + self.shape._distance(self.centers) / radii
-        _, _, overlap = contact_forces(self.centers, radii, self.starts, self.neighbours, self.lengths,
-                                       self.compiled)
+        overlap = self.pair_overlap  # of the relaxation's last forces, at these centres
         typical = float(np.median(overlap[overlap > 0])) if (overlap > 0).any() else 0.0
         wedged = np.flatnonzero((squeeze > WEDGED) & (squeeze > WEDGED_OVER * typical))
         if len(wedged):
@@ -180,16 +180,10 @@ class Bed:
         fits = [scale, float((clearance / self.sizes).min())]
         if self.period is not None:  # no sphere as wide as a period: it would meet its own image
             fits.append(0.5 * self.period.shortest / float(self.sizes.max()))
-        reach = 2.0 * scale * float(self.sizes.max()) * (1.0 + 1e-6)
-        starts, neighbours = neighbour_lists(self.centers, reach, self.period)
-        if len(neighbours):
-            rows = pair_rows(starts)
-            if self.period is None:
-                delta = self.centers[rows] - self.centers[neighbours]
-            else:
-                delta = self.period.difference(self.centers[rows], self.centers[neighbours])
-            distance = np.sqrt(np.einsum("ij,ij->i", delta, delta))
-            fits.append(float((distance / (self.sizes[rows] + self.sizes[neighbours])).min()))
+        rows, cols, distance = close_pairs(self.centers, 2.0 * scale * float(self.sizes.max()) * (1.0 + 1e-6),
+                                           self.period)
+        if len(rows):
+            fits.append(float((distance / (self.sizes[rows] + self.sizes[cols])).min()))
         return min(fits) * (1.0 - 1e-9)
 
 
@@ -250,15 +244,9 @@ def contacts(centers, radii, shape, period=None, gap: float = CONTACT_GAP) -> di
     others (``backbone_mean``, 2d at isostatic jamming of frictionless spheres); a contact is a
     gap of at most ``gap`` of the pair's reach (a wall: of the radius)."""
     count, dim = centers.shape
-    starts, neighbours = neighbour_lists(centers, 2.0 * float(radii.max()) * (1.0 + gap), period)
-    rows = pair_rows(starts)
-    delta = centers[rows] - centers[neighbours]
-    if period is not None:
-        delta = period.difference(centers[rows], centers[neighbours])
-    reach = radii[rows] + radii[neighbours]
-    touching = np.sqrt(np.einsum("ij,ij->i", delta, delta)) <= reach * (1.0 + gap)
-    per_particle = (np.bincount(rows[touching], minlength=count)
-                    + np.bincount(neighbours[touching], minlength=count))
+    rows, cols, distance = close_pairs(centers, 2.0 * float(radii.max()) * (1.0 + gap), period)
+    touching = distance <= (radii[rows] + radii[cols]) * (1.0 + gap)
+    per_particle = np.bincount(rows[touching], minlength=count) + np.bincount(cols[touching], minlength=count)
     walls = -shape._distance(centers) <= radii * (1.0 + gap)
     per_particle = per_particle + walls
     rattlers = per_particle < dim + 1

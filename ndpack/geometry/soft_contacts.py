@@ -100,6 +100,18 @@ def contact_forces(centers, radii, starts, neighbours, lengths, compiled: bool =
     return forces, energy, overlap
 
 
+def close_pairs(centers: np.ndarray, reach: float, period=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pairs of centres (n, d) within ``reach`` (nearest images along ``period``'s axes):
+    the lower and the higher sphere (m,) int64 of each, and their distance (m,) float64."""
+    starts, cols = neighbour_lists(centers, reach, period)
+    rows = pair_rows(starts)
+    if period is None:
+        delta = centers[rows] - centers[cols]
+    else:
+        delta = period.difference(centers[rows], centers[cols])
+    return rows, cols, np.sqrt(np.einsum("ij,ij->i", delta, delta))
+
+
 def pair_rows(starts: np.ndarray) -> np.ndarray:
     """The lower sphere (m,) int64 of each listed pair, from the lists' ``starts`` (n + 1,)."""
     return np.repeat(np.arange(len(starts) - 1), np.diff(starts))
