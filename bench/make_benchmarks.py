@@ -302,7 +302,7 @@ SOURCES = {
         f"bench/results/fresh_machine_2core_issue48_step12_{version}.json", "2026-11-28")
        for version, commit in (("base", "4d9dd08"), ("now", "c9b18cc"))},
     "dense_beds_2core_issue49.json": Source(
-        "2 cores", "755fed2", "python bench/dense_beds.py --out bench/results/dense_beds_2core_issue49.json",
+        "2 cores", "dac52f0", "python bench/dense_beds.py --out bench/results/dense_beds_2core_issue49.json",
         "2026-11-28"),
     "work_model_2core_armadillo_100k_issue48_step11_walks.json": Source(
         "2 cores", "ebce931", "python bench/work_model.py --mesh armadillo.obj --count 100000 --parts walks"),
